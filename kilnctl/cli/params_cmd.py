@@ -1,0 +1,40 @@
+"""``kilnctl params``: print the resolved parameter set with units and sources."""
+
+from __future__ import annotations
+
+from . import print_json
+from .common import add_config_arg, load_params
+
+
+def register(sub) -> None:
+    """Add the ``params`` subcommand.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+    """
+    p = sub.add_parser("params", help="print the parameter set with units and sources")
+    add_config_arg(p)
+    p.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    """Print the parameters; return the exit code."""
+    params = load_params(args)
+    rows = params.describe()
+    if args.json:
+        print_json({r["name"]: {k: r[k] for k in ("value", "unit", "source", "description", "group")}
+                    for r in rows})
+        return 0
+    group = None
+    for r in rows:
+        if r["group"] != group:
+            group = r["group"]
+            print(f"\n[{group}]")
+        value = r["value"] if isinstance(r["value"], str) else f"{r['value']:.6g}"
+        mark = "*" if r["value"] != r["default"] else " "
+        print(f"{mark} {r['name']:<15} {value:>12}  {r['unit']:<12} {r['description']}")
+        print(f"  {'':<15} {'':>12}  source: {r['source']}")
+    print("\n(* = changed from the default)")
+    return 0

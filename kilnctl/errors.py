@@ -1,0 +1,90 @@
+"""Exceptions raised by kilnctl.
+
+Every error a user can cause derives from :class:`KilnctlError`, and also from
+the matching built-in (``ValueError``, ``RuntimeError`` ...), so callers may
+catch either.  Messages name the offending parameter, file or option and say
+how to fix it.
+"""
+
+from __future__ import annotations
+
+import difflib
+
+__all__ = [
+    "KilnctlError",
+    "ParameterError",
+    "ConfigFileError",
+    "ModelError",
+    "SimulationError",
+    "EventStormError",
+    "DesignError",
+    "DataError",
+    "NotFittedError",
+    "OptimizationError",
+    "close_matches_hint",
+]
+
+
+class KilnctlError(Exception):
+    """Base class of every error kilnctl raises on purpose."""
+
+
+class ParameterError(KilnctlError, ValueError):
+    """A parameter name or value is unknown or physically impossible."""
+
+
+class ConfigFileError(KilnctlError, ValueError):
+    """A configuration file cannot be read or does not have the expected form."""
+
+
+class ModelError(KilnctlError, ValueError):
+    """A plant cannot be assembled (unknown component, missing dependency)."""
+
+
+class SimulationError(KilnctlError, RuntimeError):
+    """A simulation could not be completed (bad horizon, integrator failure)."""
+
+
+class EventStormError(SimulationError):
+    """The hybrid simulation switched modes too often: it names the mode pair."""
+
+
+class DesignError(KilnctlError, ValueError):
+    """A controller design request is malformed or cannot be met at all."""
+
+
+class DataError(KilnctlError, ValueError):
+    """A measurement file is malformed: names the file, line and column."""
+
+
+class NotFittedError(KilnctlError, RuntimeError):
+    """An estimator was used before ``fit`` was called."""
+
+
+class OptimizationError(KilnctlError, RuntimeError):
+    """An optimization failed or is infeasible: carries the solver status."""
+
+
+def close_matches_hint(name: str, known) -> str:
+    """Return a "did you mean ..." sentence for an unknown ``name``.
+
+    Parameters
+    ----------
+    name : str
+        The unknown name the user gave.
+    known : iterable of str
+        The valid names.
+
+    Returns
+    -------
+    str
+        A sentence listing up to three close matches, or all valid names when
+        none is close.
+    """
+    known = sorted(known)
+    close = difflib.get_close_matches(name, known, n=3, cutoff=0.5)
+    if not close:
+        close = [k for k in known if k.lower() == name.lower()]
+    if close:
+        return "did you mean " + " or ".join(repr(c) for c in close) + "?"
+    return "valid names are: " + ", ".join(known)
