@@ -1,0 +1,82 @@
+"""The nonlinear kiln-drive plant, declared once as CasADi components.
+
+>>> from kilnctl.model import component_names
+>>> component_names("macro")[:3]
+('ramp', 'pid', 'voltage_limit')
+"""
+
+from __future__ import annotations
+
+from ..errors import ModelError, close_matches_hint
+from . import drive, drivetrain, kiln  # noqa: F401  (register the components)
+from .assembly import Plant, get_plant
+from .base import REGISTRY, Component, Guard, StateVar, register
+
+__all__ = ["MODELS", "ORDER", "component_names", "Plant", "get_plant", "REGISTRY", "Component", "Guard",
+           "StateVar", "register", "describe_components"]
+
+#: phase order of the components: signals flow from the ramp to the stress
+ORDER: tuple[str, ...] = (
+    "ramp", "pid", "voltage_limit", "dc_motor", "current_limit", "second_motor",
+    "gearbox", "drivetrain_compliance", "coupling", "pinion", "mesh",
+    "kiln", "kiln_fixed", "bearing_friction", "burden", "bending_stress",
+)
+
+#: the paper's two models as component lists
+MODELS: dict[str, tuple[str, ...]] = {
+    # macro model (eqs. 1-21): rigid reducer, burden stick-slip, drive limits
+    "macro": ("ramp", "pid", "voltage_limit", "dc_motor", "current_limit", "gearbox", "kiln",
+              "bearing_friction", "burden", "bending_stress"),
+    # micro model (eqs. 26-34): coupling, pinion, mesh with backlash
+    "micro": ("ramp", "pid", "voltage_limit", "dc_motor", "current_limit", "coupling", "pinion", "mesh",
+              "kiln", "bearing_friction", "burden", "bending_stress"),
+}
+
+
+def component_names(model: str = "macro", add=(), remove=()) -> tuple[str, ...]:
+    """Return the component list of a model with effects added or removed.
+
+    Parameters
+    ----------
+    model : {'macro', 'micro'}
+        Base model of the paper.
+    add : sequence of str
+        Components to add; one that ``replaces`` others removes them.
+    remove : sequence of str
+        Components to take out.
+
+    Returns
+    -------
+    tuple of str
+        Component names in phase order.
+
+    Raises
+    ------
+    ModelError
+        Unknown model or component name (with close matches).
+    """
+    if model not in MODELS:
+        raise ModelError(f"unknown model {model!r}: {close_matches_hint(model, MODELS)}")
+    names = list(MODELS[model])
+    for nm in list(add) + list(remove):
+        if nm not in REGISTRY:
+            raise ModelError(f"unknown component {nm!r}: {close_matches_hint(nm, REGISTRY)}")
+    for nm in remove:
+        if nm not in names:
+            raise ModelError(f"component {nm!r} is not in the {model} model, so it cannot be removed")
+        names.remove(nm)
+    for nm in add:
+        for rep in REGISTRY[nm].replaces:
+            if rep in names:
+                names.remove(rep)
+        if nm not in names:
+            names.append(nm)
+    rank = {nm: i for i, nm in enumerate(ORDER)}
+    last = rank["bending_stress"]
+    return tuple(sorted(names, key=lambda nm: rank.get(nm, last - 0.5)))
+
+
+def describe_components() -> list[dict]:
+    """Return name, summary, parameters and documentation of every component."""
+    return [{"name": c.name, "summary": c.summary, "params": list(c.param_names),
+             "modes": list(c.modes), "doc": (c.__doc__ or "").strip()} for c in REGISTRY.values()]

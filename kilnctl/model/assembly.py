@@ -1,0 +1,362 @@
+"""Assembling components into a plant and compiling its per-mode functions.
+
+:class:`Plant` holds one structure (a list of components and the string
+options); for each combination of component modes it builds, once and on
+demand, the CasADi functions the simulator needs: the right-hand side, the
+guards with their time derivatives, the outputs, and CVODES integrators.
+Parameters are symbolic inputs, so a plant is reused for any numeric values.
+"""
+
+from __future__ import annotations
+
+from collections import defaultdict
+from dataclasses import dataclass
+from functools import lru_cache
+
+import casadi as ca
+import numpy as np
+
+from ..errors import ModelError, close_matches_hint
+from ..params import Parameters
+from .base import NUMERIC_NAMES, OPTION_NAMES, REGISTRY, Component, Guard, ModelSpec, SymParams
+
+__all__ = ["Eqs", "Plant", "ModeFunctions", "get_plant"]
+
+GROUND = "ground"
+
+
+class Eqs:
+    """Symbolic equations of one mode, filled in by the components.
+
+    Attributes
+    ----------
+    p : SymParams
+        Symbolic parameters.
+    x : dict of str to casadi.SX
+        States in physical units.
+    t : casadi.SX
+        Time [s].
+    sig : dict
+        Named signals (``e_v``, ``e_f``, ``i_a`` ...).
+    accel : dict
+        Angular accelerations of the nodes [rad/s^2], after assembly.
+    """
+
+    def __init__(self, p: SymParams, x: dict, t):
+        self.p = p
+        self.x = x
+        self.t = t
+        self.sig: dict[str, ca.SX] = {}
+        self.inertia: dict[str, list] = defaultdict(list)
+        self.torques: dict[str, list] = defaultdict(list)
+        self.links: list[tuple[str, str, ca.SX]] = []
+        self.rates: dict[str, ca.SX] = {}
+        self.guards: list[Guard] = []
+        self.outputs: dict[str, ca.SX] = {}
+        self.accel: dict[str, ca.SX] = {}
+        self.projection: dict[str, ca.SX] = {}
+
+    # --- phase 2 ---------------------------------------------------------
+    def add_inertia(self, node: str, J) -> None:
+        """Add inertia ``J`` [kg*m^2] to ``node``."""
+        self.inertia[node].append(J)
+
+    def add_torque(self, node: str, T) -> None:
+        """Apply torque ``T`` [N*m] to ``node`` (positive along its rotation)."""
+        self.torques[node].append(T)
+
+    def link(self, a: str, b: str, ratio) -> None:
+        """Join two nodes rigidly: omega_a = ratio * omega_b."""
+        self.links.append((a, b, ratio))
+
+    # --- phase 3 ---------------------------------------------------------
+    def set_rate(self, state: str, expr) -> None:
+        """Set the time derivative of ``state`` (physical units per second)."""
+        if state in self.rates:
+            raise ModelError(f"two components set the rate of state {state!r}")
+        self.rates[state] = expr
+
+    def add_guard(self, guard: Guard) -> None:
+        """Add a mode-switch guard of the current mode."""
+        self.guards.append(guard)
+
+    def add_output(self, name: str, expr) -> None:
+        """Add a named output signal."""
+        self.outputs[name] = expr
+
+    def torque_sum(self, node: str):
+        """Sum of external torques on ``node`` [N*m]."""
+        return sum(self.torques.get(node, []), ca.SX(0))
+
+    def link_torque(self, node: str):
+        """Torque the rigid links deliver into ``node``: J*accel - external torques [N*m]."""
+        J = sum(self.inertia.get(node, []), ca.SX(0))
+        return J * self.accel[node] - self.torque_sum(node)
+
+    def assemble(self, nodes: list[str]) -> None:
+        """Compute node accelerations from inertias, torques and rigid links."""
+        adj: dict[str, list] = defaultdict(list)
+        for a, b, r in self.links:
+            adj[a].append((b, 1.0 / r))  # omega_b = omega_a / r
+            adj[b].append((a, r))
+        rho: dict[str, object] = {}
+        for root in nodes:
+            if root in rho:
+                continue
+            group = {root: ca.SX(1)}
+            queue = [root]
+            while queue:
+                u = queue.pop()
+                for v, r in adj[u]:
+                    if v not in group:
+                        group[v] = group[u] * r
+                        queue.append(v)
+            rho.update(group)
+            if GROUND in group:
+                for nd in group:
+                    self.accel[nd] = ca.SX(0)
+                continue
+            J = sum((group[nd] ** 2 * sum(self.inertia.get(nd, []), ca.SX(0)) for nd in group), ca.SX(0))
+            T = sum((group[nd] * self.torque_sum(nd) for nd in group), ca.SX(0))
+            acc = T / J
+            # momentum of the group, to project speeds onto the rigid links at a mode switch
+            H = sum((group[nd] * sum(self.inertia.get(nd, []), ca.SX(0)) * self.x[f"omega_{nd}"]
+                     for nd in group), ca.SX(0))
+            for nd in group:
+                self.accel[nd] = group[nd] * acc
+                if len(group) > 1:
+                    self.projection[f"omega_{nd}"] = group[nd] * H / J
+        for nd in nodes:
+            if nd != GROUND:
+                self.set_rate(f"omega_{nd}", self.accel[nd])
+
+
+@dataclass
+class ModeFunctions:
+    """Compiled functions of one mode combination.
+
+    Attributes
+    ----------
+    mode : tuple of str
+        Mode of each moded component, in :attr:`Plant.moded` order.
+    rhs : casadi.Function
+        (xs, t, P) -> dxs/dt in scaled states.
+    output : casadi.Function
+        (xs, t, P) -> output vector at one point.
+    project : casadi.Function
+        (xs, P) -> xs with node speeds made consistent with this mode's rigid
+        links, conserving each rigid group's angular momentum.
+    guard : casadi.Function
+        (xs, t, P) -> (g, selector, dg/dt), one entry per guard.
+    guard_map : casadi.Function
+        ``guard`` g-values mapped over an output grid.
+    output_map : casadi.Function
+        (XS, T, P) -> outputs, mapped over an output grid.
+    integ_grid : casadi.Function
+        CVODES over [t0, t0+T] returning ``n_grid`` equally spaced states.
+    integ_one : casadi.Function
+        CVODES over [t0, t0+T] returning the end state.
+    guards : list of Guard
+        Guard declarations (kind, component, targets).
+    """
+
+    mode: tuple
+    rhs: ca.Function
+    output: ca.Function
+    project: ca.Function
+    guard: ca.Function
+    guard_map: ca.Function
+    output_map: ca.Function
+    integ_grid: ca.Function
+    integ_one: ca.Function
+    guards: list
+
+
+class Plant:
+    """A plant structure assembled from named components.
+
+    Parameters
+    ----------
+    components : sequence of str
+        Component names, in phase order (see :func:`kilnctl.model.build_plant`).
+    options : dict
+        Values of the string options (``friction_law`` ...).
+    n_grid : int, default 200
+        Output points per integrator call.
+    rtol, atol : float
+        CVODES relative tolerance and absolute tolerance on scaled states.
+
+    Raises
+    ------
+    ModelError
+        Unknown component, a missing required component, or a state claimed
+        twice.
+    """
+
+    def __init__(self, components, options: dict, n_grid: int = 200, rtol: float = 1e-8, atol: float = 1e-9):
+        names = list(components)
+        for nm in names:
+            if nm not in REGISTRY:
+                raise ModelError(f"unknown component {nm!r}: {close_matches_hint(nm, REGISTRY)}")
+        if len(set(names)) != len(names):
+            raise ModelError(f"component list has duplicates: {names}")
+        for nm in names:
+            for req in REGISTRY[nm].requires:
+                if req not in names:
+                    raise ModelError(f"component {nm!r} needs component {req!r}: add it to the list")
+        self.names = tuple(names)
+        self.options = dict(options)
+        self.components: list[Component] = [REGISTRY[nm]() for nm in names]
+        self.spec = ModelSpec()
+        for c in self.components:
+            c.declare(self.spec)
+        self.state_names = tuple(s.name for s in self.spec.states)
+        self.scales = np.array([s.scale for s in self.spec.states])
+        self.node_names = [n.name for n in self.spec.nodes]
+        self.moded = [c for c in self.components if c.modes]
+        self.n_grid = int(n_grid)
+        self.rtol, self.atol = float(rtol), float(atol)
+        self._cache: dict[tuple, ModeFunctions] = {}
+        self._output_names: tuple[str, ...] | None = None
+        self.build_seconds = 0.0
+
+    # --- numeric helpers ----------------------------------------------------
+    def param_vector(self, params: Parameters) -> np.ndarray:
+        """Numeric parameter vector in :data:`NUMERIC_NAMES` order."""
+        return np.array([params[n] for n in NUMERIC_NAMES], dtype=float)
+
+    def initial(self, params: Parameters) -> tuple[np.ndarray, tuple]:
+        """Initial scaled state and mode at t = 0.
+
+        Parameters
+        ----------
+        params : Parameters
+
+        Returns
+        -------
+        xs0 : ndarray
+            Scaled initial state.
+        mode0 : tuple of str
+            Initial mode of each moded component.
+        """
+        x0 = {n: 0.0 for n in self.state_names}
+        for c in self.components:
+            x0.update(c.initial_state(params))
+        mode0 = tuple(c.initial_mode(params, x0) for c in self.moded)
+        xs0 = np.array([x0[n] for n in self.state_names]) / self.scales
+        return xs0, mode0
+
+    def mode_dict(self, mode: tuple) -> dict[str, str]:
+        """Map a mode tuple to {component name: mode}."""
+        return {c.name: m for c, m in zip(self.moded, mode)}
+
+    # --- symbolic build -------------------------------------------------------
+    def equations(self, mode: tuple) -> tuple[Eqs, ca.SX, ca.SX, SymParams]:
+        """Build the symbolic equations of one mode.
+
+        Returns
+        -------
+        e : Eqs
+        xs : casadi.SX
+            Scaled state symbol.
+        t : casadi.SX
+            Time symbol.
+        sp : SymParams
+        """
+        sp = SymParams(self.options)
+        xs = ca.SX.sym("xs", len(self.state_names))
+        t = ca.SX.sym("t")
+        x = {n: xs[i] * self.scales[i] for i, n in enumerate(self.state_names)}
+        e = Eqs(sp, x, t)
+        md = self.mode_dict(mode)
+        for c in self.components:
+            c.signals(e, md.get(c.name))
+        for c in self.components:
+            c.loads(e, md.get(c.name))
+        e.assemble(self.node_names)
+        for c in self.components:
+            c.finish(e, md.get(c.name))
+        missing = [n for n in self.state_names if n not in e.rates]
+        if missing:
+            raise ModelError(f"no component sets the rate of states {missing}")
+        return e, xs, t, sp
+
+    @property
+    def output_names(self) -> tuple[str, ...]:
+        """Names of the output signals (the same in every mode)."""
+        if self._output_names is None:
+            xs0 = tuple(c.modes[0] for c in self.moded)
+            e, *_ = self.equations(xs0)
+            self._output_names = tuple(e.outputs)
+        return self._output_names
+
+    def functions(self, mode: tuple) -> ModeFunctions:
+        """Compiled functions of a mode combination (built once, then cached)."""
+        mf = self._cache.get(mode)
+        if mf is None:
+            import time
+
+            t_start = time.perf_counter()
+            mf = self._build(mode)
+            self._cache[mode] = mf
+            self.build_seconds += time.perf_counter() - t_start
+        return mf
+
+    def _build(self, mode: tuple) -> ModeFunctions:
+        e, xs, t, sp = self.equations(mode)
+        P = sp.vector
+        f = ca.vertcat(*[e.rates[n] / self.scales[i] for i, n in enumerate(self.state_names)])
+        rhs = ca.Function("rhs", [xs, t, P], [f])
+        g = ca.vertcat(*[gd.expr for gd in e.guards]) if e.guards else ca.SX(0, 1)
+        sel = ca.vertcat(*[(gd.selector if gd.selector is not None else ca.SX(1)) for gd in e.guards]) \
+            if e.guards else ca.SX(0, 1)
+        gdot = ca.jtimes(g, xs, f) + ca.jacobian(g, t) if e.guards else ca.SX(0, 1)
+        guard = ca.Function("guard", [xs, t, P], [g, sel, gdot])
+        names = self.output_names
+        extra = [n for n in e.outputs if n not in names]
+        if extra or len(e.outputs) != len(names):
+            raise ModelError(f"mode {mode} defines outputs {sorted(e.outputs)}, expected {sorted(names)}")
+        y = ca.vertcat(*[e.outputs[n] for n in names])
+        out = ca.Function("out", [xs, t, P], [y])
+        proj = ca.vertcat(*[e.projection.get(nm, e.x[nm]) / self.scales[i]
+                            for i, nm in enumerate(self.state_names)])
+        project = ca.Function("project", [xs, P], [proj])
+        n = self.n_grid
+        guard_g = ca.Function("guard_g", [xs, t, P], [g])
+        guard_map = guard_g.map(n)
+        output_map = out.map(n + 1)
+        tau = ca.SX.sym("tau")
+        pint = ca.SX.sym("pint", 2)  # t0, T
+        ode = pint[1] * ca.substitute(f, t, pint[0] + tau * pint[1])
+        dae = {"x": xs, "t": tau, "p": ca.vertcat(pint, P), "ode": ode}
+        opts = {"abstol": self.atol, "reltol": self.rtol, "max_num_steps": 200000}
+        integ_grid = ca.integrator("ig", "cvodes", dae, 0.0, list(np.linspace(0, 1, n + 1)[1:]), opts)
+        integ_one = ca.integrator("i1", "cvodes", dae, 0.0, 1.0, opts)
+        return ModeFunctions(mode, rhs, out, project, guard, guard_map, output_map, integ_grid, integ_one, list(e.guards))
+
+
+@lru_cache(maxsize=64)
+def _plant_cached(names: tuple, options: tuple, n_grid: int, rtol: float, atol: float) -> Plant:
+    return Plant(names, dict(options), n_grid=n_grid, rtol=rtol, atol=atol)
+
+
+def get_plant(names, params: Parameters, n_grid: int = 200, rtol: float = 1e-8, atol: float = 1e-9) -> Plant:
+    """Return the (cached) plant structure for components and options.
+
+    Parameters
+    ----------
+    names : sequence of str
+        Component names.
+    params : Parameters
+        Only the string options are used (they select the structure).
+    n_grid : int
+        Output points per integrator call.
+    rtol, atol : float
+        Integrator tolerances.
+
+    Returns
+    -------
+    Plant
+    """
+    options = tuple((k, params[k]) for k in OPTION_NAMES)
+    return _plant_cached(tuple(names), options, int(n_grid), float(rtol), float(atol))

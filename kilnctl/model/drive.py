@@ -1,0 +1,218 @@
+"""Electric drive components: speed reference ramp, PID, DC motor, drive limits.
+
+Signals shared between these components (the interface, by name):
+
+``e_v`` [rpm], ``ev_dot`` [rpm/s]
+    speed reference and its rate (``ramp``).
+``e_f`` [rpm]
+    speed error e_v - K*omega_m (``pid``), eq. 21 line 6.
+``e_pi`` [V]
+    PI voltage k_p*e_f + k_I*z before the voltage limit (``pid``).
+``e_a`` [V]
+    PI voltage after the voltage limit (``voltage_limit``; else ``e_pi``).
+``integrate`` [-]
+    1 while the controller integrates, 0 while a limit freezes it
+    (conditional-integration anti-windup).
+``i_a`` [A]
+    armature current (``dc_motor``; held at the limit by ``current_limit``).
+``current_limited`` [-]
+    1 while the current limit holds the current.
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+
+from .base import Component, Guard, register
+
+RPM_PER_RAD_S = 60.0 / (2.0 * 3.141592653589793)
+
+
+@register
+class Ramp(Component):
+    """Ramp generator of the speed reference.
+
+    Reading of the paper's ramp constant (see docs/assumptions.md): the speed
+    reference rises at ``ramp_rate`` [rpm/s] from zero to ``omega_ref`` [rpm]
+    and is then held.  The corner is a mode switch (``ramp_end``), located
+    exactly like any other event.
+    """
+
+    name = "ramp"
+    summary = "speed reference rising at ramp_rate [rpm/s] to omega_ref [rpm]"
+    param_names = ("ramp_rate", "omega_ref")
+    modes = ("rising", "hold")
+
+    def signals(self, e, mode):
+        p = e.p
+        if mode == "rising":
+            e.sig["e_v"] = p.ramp_rate * e.t
+            e.sig["ev_dot"] = p.ramp_rate
+        else:
+            e.sig["e_v"] = p.omega_ref
+            e.sig["ev_dot"] = ca.SX(0)
+
+    def finish(self, e, mode):
+        p = e.p
+        if mode == "rising":
+            t_r = p.omega_ref / p.ramp_rate
+            e.add_guard(Guard("ramp_end", self.name, (t_r - e.t) / t_r, "hold"))
+        e.add_output("speed_ref_rpm", e.sig["e_v"])
+
+
+@register
+class PID(Component):
+    """PID speed controller of eq. 21.
+
+    e_f = e_v - K*omega_m [rpm]; the armature voltage is
+    e_a = k_p*e_f + k_I*integral(e_f), and the derivative k_D*de_f/dt is
+    realised through the armature inductance (eq. 21 line 2: the current
+    carries a direct term (k_D/L_a)*e_f), so nothing is differentiated.
+    State ``z`` = integral of e_f [rpm*s].
+    """
+
+    name = "pid"
+    summary = "PID on the speed error, derivative realised through L_a (eq. 21)"
+    param_names = ("k_p", "k_I", "k_D", "K_fb")
+    requires = ("ramp", "dc_motor")
+
+    def declare(self, spec):
+        spec.add_state("z", "rpm*s", 100.0, "integral of the speed error e_f")
+
+    def signals(self, e, mode):
+        p = e.p
+        e.sig["e_f"] = e.sig["e_v"] - p.K_fb * e.x["omega_motor"]
+        e.sig["e_pi"] = p.k_p * e.sig["e_f"] + p.k_I * e.x["z"]
+        e.sig.setdefault("e_a", e.sig["e_pi"])
+        e.sig.setdefault("integrate", ca.SX(1))
+
+    def finish(self, e, mode):
+        e.sig["ef_dot"] = e.sig["ev_dot"] - e.p.K_fb * e.accel["motor"]
+        e.set_rate("z", e.sig["integrate"] * e.sig["e_f"])
+        e.add_output("e_a", e.sig["e_a"])
+
+
+@register
+class VoltageLimit(Component):
+    """Armature-voltage limit of the drive, with anti-windup.
+
+    The PI voltage is clamped to +-V_max; while clamped the integrator is
+    frozen (conditional integration).  The derivative action, realised in the
+    current path (eq. 21), is not clamped.
+    """
+
+    name = "voltage_limit"
+    summary = "PI voltage clamped to +-V_max, integrator frozen while clamped"
+    param_names = ("V_max",)
+    requires = ("pid",)
+    modes = ("free", "upper", "lower")
+
+    def signals(self, e, mode):
+        p = e.p
+        if mode == "upper":
+            e.sig["e_a"], e.sig["integrate"] = p.V_max, ca.SX(0)
+        elif mode == "lower":
+            e.sig["e_a"], e.sig["integrate"] = -p.V_max, ca.SX(0)
+
+    def finish(self, e, mode):
+        p, epi = e.p, e.sig["e_pi"]
+        if mode == "free":
+            e.add_guard(Guard("voltage_limit", self.name, (p.V_max - epi) / p.V_max, "upper"))
+            e.add_guard(Guard("voltage_limit", self.name, (p.V_max + epi) / p.V_max, "lower"))
+        elif mode == "upper":
+            e.add_guard(Guard("voltage_limit_release", self.name, (epi - p.V_max) / p.V_max, "free"))
+        else:
+            e.add_guard(Guard("voltage_limit_release", self.name, (-p.V_max - epi) / p.V_max, "free"))
+
+
+@register
+class DCMotor(Component):
+    """Separately excited DC motor, eq. 4 and eq. 21.
+
+    L_a di_a/dt = e_a + k_D de_f/dt - R_a i_a - k_b omega_m, with the
+    derivative term realised through the inductance: the state is
+    x_a = i_a - (k_D/L_a) e_f [A].  Torque k_i*i_a drives the node
+    ``motor`` (inertia J_m, viscous friction B_m).
+    """
+
+    name = "dc_motor"
+    summary = "armature circuit and motor inertia (eq. 4, eq. 21)"
+    param_names = ("R_a", "L_a", "k_i", "k_b", "J_m", "B_m")
+
+    def declare(self, spec):
+        spec.add_state("x_a", "A", 1000.0, "armature current less the derivative term (k_D/L_a)*e_f")
+        spec.add_node("motor", "motor rotor", 50.0)
+
+    def signals(self, e, mode):
+        p = e.p
+        e.sig["i_a_free"] = e.x["x_a"] + p.k_D / p.L_a * (e.sig["e_v"] - p.K_fb * e.x["omega_motor"])
+        e.sig.setdefault("i_a", e.sig["i_a_free"])
+        e.sig.setdefault("current_limited", 0)
+
+    def loads(self, e, mode):
+        p = e.p
+        e.add_inertia("motor", p.J_m)
+        e.add_torque("motor", p.k_i * e.sig["i_a"] - p.B_m * e.x["omega_motor"])
+
+    def finish(self, e, mode):
+        p = e.p
+        if e.sig["current_limited"]:
+            # current held: x_a follows so that x_a + (k_D/L_a) e_f stays at the limit
+            e.set_rate("x_a", -p.k_D / p.L_a * e.sig["ef_dot"])
+        else:
+            e.set_rate("x_a", (e.sig["e_a"] - p.R_a * e.sig["i_a"] - p.k_b * e.x["omega_motor"]) / p.L_a)
+        e.add_output("i_a", e.sig["i_a"])
+        e.add_output("speed_rpm", e.x["omega_motor"] * RPM_PER_RAD_S)
+
+
+@register
+class CurrentLimit(Component):
+    """Armature-current limit of the drive, with anti-windup.
+
+    When the current reaches +-I_max the drive holds it there (the armature
+    voltage drops to what holds it) and freezes the integrator; it lets go
+    when the unlimited current would fall back inside the limit.
+    """
+
+    name = "current_limit"
+    summary = "armature current held at +-I_max, integrator frozen while held"
+    param_names = ("I_max",)
+    requires = ("dc_motor", "pid")
+    modes = ("free", "upper", "lower")
+
+    def signals(self, e, mode):
+        p = e.p
+        if mode in ("upper", "lower"):
+            e.sig["i_a"] = p.I_max if mode == "upper" else -p.I_max
+            e.sig["integrate"] = ca.SX(0)
+            e.sig["current_limited"] = 1
+
+    def finish(self, e, mode):
+        p = e.p
+        if mode == "free":
+            e.add_guard(Guard("current_limit", self.name, (p.I_max - e.sig["i_a"]) / p.I_max, "upper"))
+            e.add_guard(Guard("current_limit", self.name, (p.I_max + e.sig["i_a"]) / p.I_max, "lower"))
+            return
+        # rate the current would have without the limit, in volts across L_a
+        v_free = (e.sig["e_a"] + p.k_D * e.sig["ef_dot"] - p.R_a * e.sig["i_a"]
+                  - p.k_b * e.x["omega_motor"])
+        sign = 1.0 if mode == "upper" else -1.0
+        e.add_guard(Guard("current_limit_release", self.name, sign * v_free / p.V_max, "free"))
+
+
+@register
+class SecondMotor(Component):
+    """Second drive motor, electrically isolated but mechanically coupled.
+
+    As in the paper's experiment (Fig. 5): it delivers no torque, but its
+    rotor inertia J_m2 must be accelerated with the first motor.
+    """
+
+    name = "second_motor"
+    summary = "inertia J_m2 of the isolated second motor on the motor shaft"
+    param_names = ("J_m2",)
+    requires = ("dc_motor",)
+
+    def loads(self, e, mode):
+        e.add_inertia("motor", e.p.J_m2)
+
