@@ -169,6 +169,15 @@ _SPEC_LIST = [
        "Lewis form factor of the girth gear tooth", "gear"),
     _p("dynamic_factor", "none", "-", "assumed: at 0.19 m/s pitch-line speed Barth's factor is only 1.03",
        "'none' or 'barth' ((6.1 + V)/6.1) on the Lewis stress", "gear", choices=("none", "barth")),
+    # --- effects a measurement may reveal (components in kilnctl/model/effects.py) ---
+    _p("tau_s", 0.05, "s", "assumed: first-order lag of a tacho-generator with filter",
+       "speed sensor time constant (component 'speed_sensor_lag')", "effects"),
+    _p("T_unb", 2.0e5, "N*m", "assumed: about 5 % of the 4.2 MN*m kiln running torque",
+       "amplitude of the once-per-revolution kiln torque (component 'kiln_unbalance')", "effects", "nonnegative"),
+    _p("phi_unb", 0.0, "rad", "assumed: phase of the eccentric mass or shell crank at t = 0",
+       "phase of the once-per-revolution torque (component 'kiln_unbalance')", "effects", "finite"),
+    _p("B_o", 1.0e6, "N*m*s/rad", "assumed: about 1 % of the running torque at 0.46 rpm (seals, tyre slip)",
+       "viscous drag on the kiln (component 'viscous_drag')", "effects", "nonnegative"),
     # --- elastomeric coupling (micro model) -------------------------------------
     _p("k_c", 1.0e5, "N*m/rad", "assumed: thesis [9] not available; large elastomeric coupling, "
        "about 2.5 deg twist at the 4 kN*m running torque", "coupling stiffness at zero twist, motor side",
@@ -184,7 +193,7 @@ _SPEC_LIST = [
 #: all parameter declarations, by name
 SPECS: dict[str, ParamSpec] = {s.name: s for s in _SPEC_LIST}
 #: TOML section order
-GROUPS: tuple[str, ...] = ("motor", "controller", "drive", "kiln", "gear", "coupling")
+GROUPS: tuple[str, ...] = ("motor", "controller", "drive", "kiln", "gear", "coupling", "effects")
 
 
 def _check_value(spec: ParamSpec, value: Any) -> float | str:
@@ -412,7 +421,7 @@ class Parameters(Mapping):
 
         Keys may stand at the top level or inside any of the sections
         ``[motor]``, ``[controller]``, ``[drive]``, ``[kiln]``, ``[gear]``,
-        ``[coupling]``; missing keys keep their defaults.
+        ``[coupling]``, ``[effects]``; missing keys keep their defaults.
 
         Parameters
         ----------

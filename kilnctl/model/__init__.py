@@ -8,7 +8,7 @@
 from __future__ import annotations
 
 from ..errors import ModelError, close_matches_hint
-from . import drive, drivetrain, kiln  # noqa: F401  (register the components)
+from . import drive, drivetrain, effects, kiln  # noqa: F401  (register the components)
 from .assembly import Plant, get_plant
 from .base import REGISTRY, Component, Guard, StateVar, register
 
@@ -17,9 +17,9 @@ __all__ = ["MODELS", "ORDER", "component_names", "Plant", "get_plant", "REGISTRY
 
 #: phase order of the components: signals flow from the ramp to the stress
 ORDER: tuple[str, ...] = (
-    "ramp", "pid", "voltage_limit", "dc_motor", "current_limit", "second_motor",
+    "ramp", "speed_sensor_lag", "pid", "voltage_limit", "dc_motor", "current_limit", "second_motor",
     "gearbox", "drivetrain_compliance", "coupling", "pinion", "mesh",
-    "kiln", "kiln_fixed", "bearing_friction", "burden", "bending_stress",
+    "kiln", "kiln_fixed", "bearing_friction", "viscous_drag", "kiln_unbalance", "burden", "bending_stress",
 )
 
 #: the paper's two models as component lists

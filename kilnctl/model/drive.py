@@ -4,8 +4,11 @@ Signals shared between these components (the interface, by name):
 
 ``e_v`` [rpm], ``ev_dot`` [rpm/s]
     speed reference and its rate (``ramp``).
+``omega_fb`` [rad/s], ``omega_fb_dot`` [rad/s^2]
+    measured motor speed used by the controller and its rate (the motor
+    speed itself unless ``speed_sensor_lag`` is present).
 ``e_f`` [rpm]
-    speed error e_v - K*omega_m (``pid``), eq. 21 line 6.
+    speed error e_v - K*omega_fb (``pid``), eq. 21 line 6.
 ``e_pi`` [V]
     PI voltage k_p*e_f + k_I*z before the voltage limit (``pid``).
 ``e_a`` [V]
@@ -81,13 +84,14 @@ class PID(Component):
 
     def signals(self, e, mode):
         p = e.p
-        e.sig["e_f"] = e.sig["e_v"] - p.K_fb * e.x["omega_motor"]
+        e.sig.setdefault("omega_fb", e.x["omega_motor"])
+        e.sig["e_f"] = e.sig["e_v"] - p.K_fb * e.sig["omega_fb"]
         e.sig["e_pi"] = p.k_p * e.sig["e_f"] + p.k_I * e.x["z"]
         e.sig.setdefault("e_a", e.sig["e_pi"])
         e.sig.setdefault("integrate", ca.SX(1))
 
     def finish(self, e, mode):
-        e.sig["ef_dot"] = e.sig["ev_dot"] - e.p.K_fb * e.accel["motor"]
+        e.sig["ef_dot"] = e.sig["ev_dot"] - e.p.K_fb * e.sig.get("omega_fb_dot", e.accel["motor"])
         e.set_rate("z", e.sig["integrate"] * e.sig["e_f"])
         e.add_output("e_a", e.sig["e_a"])
 
@@ -145,7 +149,7 @@ class DCMotor(Component):
 
     def signals(self, e, mode):
         p = e.p
-        e.sig["i_a_free"] = e.x["x_a"] + p.k_D / p.L_a * (e.sig["e_v"] - p.K_fb * e.x["omega_motor"])
+        e.sig["i_a_free"] = e.x["x_a"] + p.k_D / p.L_a * e.sig["e_f"]
         e.sig.setdefault("i_a", e.sig["i_a_free"])
         e.sig.setdefault("current_limited", 0)
 
