@@ -128,8 +128,8 @@ _SPEC_LIST = [
     _p("m_v", 580e3, "kg", "Table 1", "mass of burden", "kiln"),
     _p("L", 1.353, "m", "Table 1", "torque arm of burden (centre of mass from kiln axis)", "kiln"),
     _p("R", 2.17, "m", "Table 1", "radius of kiln (arm of the wall friction force)", "kiln"),
-    _p("mu_c", 0.4, "-", "paper, Fig. 4: mu3 fits best", "Coulomb (kinetic) friction coefficient of burden", "kiln"),
-    _p("mu_s", 0.51, "-", "paper, Fig. 4: mu3 fits best", "static friction coefficient of burden", "kiln"),
+    _p("mu_c", 0.4, "-", "paper, Fig. 4: mu3 fits best", "Coulomb (kinetic) friction coefficient of burden", "kiln", "nonnegative"),
+    _p("mu_s", 0.51, "-", "paper, Fig. 4: mu3 fits best", "static friction coefficient of burden", "kiln", "nonnegative"),
     _p("friction_law", "paper", "-", "NOTES: the printed law is not torque-consistent",
        "'paper': breakaway when F_t > F_bf (forces, eq. 3); 'torque': breakaway when the holding torque "
        "exceeds mu_s*N*R. Both use kinetic torque mu_c*N*R opposing the relative velocity and re-stick",

@@ -160,18 +160,18 @@ class Response:
             None), ``burden_mode_final``, ``n_events``, and where the plant
             has a stress output ``peak_stress_Pa`` and ``final_stress_Pa``.
         """
-        i = self.outputs["i_a"]
-        s = {
-            "model": self.model,
-            "t_end_s": float(self.t[-1]),
-            "peak_current_A": float(np.max(np.abs(i))),
-            "final_current_A": self.window_mean("i_a"),
-            "settle_time_s": self.settle_time(),
+        s = {"model": self.model, "t_end_s": float(self.t[-1])}
+        if "i_a" in self.outputs:
+            s["peak_current_A"] = float(np.max(np.abs(self.outputs["i_a"])))
+            s["final_current_A"] = self.window_mean("i_a")
+        if "speed_rpm" in self.outputs:
+            s["settle_time_s"] = self.settle_time()
+        s.update({
             "burden_mode_final": str(self.burden_mode[-1]),
             "n_events": len(self.events),
             "events_by_kind": {k: sum(e.kind == k for e in self.events) for k in sorted({e.kind for e in self.events})},
             "wall_time_s": self.info.get("wall_s"),
-        }
+        })
         if "sigma" in self.outputs:
             s["peak_stress_Pa"] = float(np.max(np.abs(self.outputs["sigma"])))
             s["final_stress_Pa"] = self.window_mean("sigma")

@@ -23,8 +23,8 @@ from collections import Counter
 
 import numpy as np
 
-from .errors import EventStormError, ParameterError, SimulationError
-from .model import component_names, get_plant
+from .errors import EventStormError, ParameterError, SimulationError, close_matches_hint
+from .model import Guard, component_names, get_plant
 from .params import Parameters
 from .response import Event, Response
 
@@ -156,6 +156,7 @@ class _Engine:
                         "time passing, and no sliding mode resolves it; check the parameters of that component")
                 tried_sliding.add(key)
                 new = mode[:i] + (sliding,) + mode[i + 1:]
+                gd = Guard("sliding_mode", comp.name, gd.expr, sliding)
             switched.append((gd, mode, new))
             visited.append(new)
             mode = new
@@ -204,12 +205,21 @@ class _Engine:
             xb = state_at(b)
         return b, xb
 
+    def log(self, switched, t):
+        """Append the switches of one settle() call to the event list."""
+        names = [c.name for c in self.plant.moded]
+        for gd, m_from, m_to in switched:
+            i = names.index(gd.component)
+            self.events.append(Event(t, gd.kind, gd.component, m_from[i], m_to[i]))
+            self.pairs[(gd.component, m_from[i], m_to[i])] += 1
+
     # --- main loop -------------------------------------------------------------
     def run(self, xs, mode, t_end, dt):
         plant = self.plant
         n = plant.n_grid
         t = 0.0
-        mode, xs, _ = self.settle(mode, xs, t)
+        mode, xs, switched = self.settle(mode, xs, t)
+        self.log(switched, t)
         mf = plant.functions(mode)
         self.record(mf, np.array([t]), xs[:, None])
         frac = np.linspace(0.0, 1.0, n + 1)[1:]
@@ -219,8 +229,11 @@ class _Engine:
             try:
                 X = np.asarray(mf.integ_grid(x0=xs, p=np.concatenate([[t, T], self.P]))["xf"])
             except RuntimeError as exc:
-                raise SimulationError(f"integrator failed at t = {t:.6g} s in mode {plant.mode_dict(mode)}: "
-                                      f"{str(exc).splitlines()[-1]}") from None
+                why = str(exc).splitlines()[-1]
+                hint = (" (too many steps: the loop is probably unstable with these gains or parameters)"
+                        if "TOO_MUCH_WORK" in why else "")
+                raise SimulationError(f"integrator failed at t = {t:.6g} s in mode {plant.mode_dict(mode)}{hint}: "
+                                      f"{why}") from None
             if not np.all(np.isfinite(X)):
                 raise SimulationError(f"state became non-finite after t = {t:.6g} s in mode "
                                       f"{plant.mode_dict(mode)}: the parameters make the plant unstable")
@@ -247,10 +260,7 @@ class _Engine:
             self.record(mf, tg[:k], X[:, :k])
             self.record(mf, np.array([te]), xe[:, None])
             new_mode, xe, switched = self.settle(mode, xe, te, first=j)
-            for gd, m_from, m_to in switched:
-                i = [c.name for c in plant.moded].index(gd.component)
-                self.events.append(Event(te, gd.kind, gd.component, m_from[i], m_to[i]))
-                self.pairs[(gd.component, m_from[i], m_to[i])] += 1
+            self.log(switched, te)
             if len(self.events) > self.max_events:
                 (comp, a, b), cnt = self.pairs.most_common(1)[0]
                 raise EventStormError(
@@ -265,7 +275,7 @@ class _Engine:
 def simulate(params: Parameters | None = None, model: str = "macro", t_end: float = 40.0, *,
              effects=(), remove=(), components=None, dt: float | None = None,
              rtol: float = 1e-8, atol: float = 1e-9, event_tol: float = 1e-9,
-             max_events: int = 5000, n_grid: int = 200) -> Response:
+             max_events: int = 5000, n_grid: int = 200, initial=None, initial_mode=None) -> Response:
     """Simulate a start-up of the kiln drive on the nonlinear hybrid plant.
 
     Parameters
@@ -295,6 +305,11 @@ def simulate(params: Parameters | None = None, model: str = "macro", t_end: floa
         Mode switches allowed before :class:`EventStormError`.
     n_grid : int, default 200
         Grid points per integrator call (chunk length n_grid*dt).
+    initial : dict, optional
+        Initial values of states by name, in physical units (e.g.
+        ``{"omega_kiln": 0.05}``); the others start as the components say.
+    initial_mode : dict, optional
+        Initial mode by component name (e.g. ``{"burden": "slip_pos"}``).
 
     Returns
     -------
@@ -319,11 +334,29 @@ def simulate(params: Parameters | None = None, model: str = "macro", t_end: floa
     if isinstance(max_events, bool) or not isinstance(max_events, int) or max_events < 1:
         raise SimulationError(f"max_events = {max_events!r} must be a positive integer")
     names = tuple(components) if components is not None else component_names(model, effects, remove)
-    params = resolve_gains(params)
+    if "pid" in names:
+        params = resolve_gains(params)
     plant = get_plant(names, params, n_grid=n_grid, rtol=rtol, atol=atol)
     build0 = plant.build_seconds
     P = plant.param_vector(params)
     xs0, mode0 = plant.initial(params)
+    for name, value in (initial or {}).items():
+        if name not in plant.state_names:
+            raise SimulationError(f"initial state {name!r} is not a state of this plant: "
+                                  f"{close_matches_hint(name, plant.state_names)}")
+        if not math.isfinite(value):
+            raise SimulationError(f"initial state {name!r} = {value!r} must be finite")
+        i = plant.state_names.index(name)
+        xs0[i] = value / plant.scales[i]
+    moded = [c.name for c in plant.moded]
+    for comp, m in (initial_mode or {}).items():
+        if comp not in moded:
+            raise SimulationError(f"initial_mode names {comp!r}, which has no modes here: "
+                                  f"{close_matches_hint(comp, moded)}")
+        i = moded.index(comp)
+        if m not in plant.moded[i].modes:
+            raise SimulationError(f"initial_mode {comp!r} = {m!r}: choose one of {plant.moded[i].modes}")
+        mode0 = mode0[:i] + (m,) + mode0[i + 1:]
     eng = _Engine(plant, P, event_tol, max_events)
     wall0 = time.perf_counter()
     eng.run(xs0, mode0, float(t_end), float(dt))

@@ -329,7 +329,7 @@ class Plant:
         pint = ca.SX.sym("pint", 2)  # t0, T
         ode = pint[1] * ca.substitute(f, t, pint[0] + tau * pint[1])
         dae = {"x": xs, "t": tau, "p": ca.vertcat(pint, P), "ode": ode}
-        opts = {"abstol": self.atol, "reltol": self.rtol, "max_num_steps": 200000}
+        opts = {"abstol": self.atol, "reltol": self.rtol, "max_num_steps": 20000}
         integ_grid = ca.integrator("ig", "cvodes", dae, 0.0, list(np.linspace(0, 1, n + 1)[1:]), opts)
         integ_one = ca.integrator("i1", "cvodes", dae, 0.0, 1.0, opts)
         return ModeFunctions(mode, rhs, out, project, guard, guard_map, output_map, integ_grid, integ_one, list(e.guards))
