@@ -73,7 +73,6 @@ class _Engine:
         self.events: list[Event] = []
         self.pairs: Counter = Counter()
         self.t_rec: list[np.ndarray] = []
-        self.y_rec: list[np.ndarray] = []
         self.x_rec: list[np.ndarray] = []
         self.m_rec: list[np.ndarray] = []
         self.mode_index: dict[tuple, int] = {}
@@ -85,21 +84,32 @@ class _Engine:
         return self.mode_index[mode]
 
     def record(self, mf, t, X):
-        """Record outputs and states at times t (1-d) with scaled states X (nx x k)."""
-        k = X.shape[1]
-        if k == 0:
+        """Record times t (1-d) and scaled states X (nx x k) in mode ``mf.mode``."""
+        if X.shape[1] == 0:
             return
-        if k == 1:
-            Y = np.asarray(mf.output(X[:, 0], t[0], self.P)).reshape(-1, 1)
-        else:  # the mapped output function takes n_grid + 1 columns: pad, then cut
-            pad = self.plant.n_grid + 1 - k
-            Xp = np.hstack([X, np.repeat(X[:, -1:], pad, axis=1)])
-            tp = np.concatenate([t, np.repeat(t[-1], pad)])
-            Y = np.asarray(mf.output_map(Xp, tp, self.P))[:, :k]
         self.t_rec.append(np.asarray(t, dtype=float))
-        self.y_rec.append(Y)
-        self.x_rec.append(X * self.plant.scales[:, None])
-        self.m_rec.append(np.full(k, self._mid(mf.mode)))
+        self.x_rec.append(np.asarray(X, dtype=float))
+        self.m_rec.append(np.full(X.shape[1], self._mid(mf.mode)))
+
+    def outputs(self):
+        """Times, scaled states, mode codes and outputs of every recorded sample."""
+        T = np.concatenate(self.t_rec)
+        X = np.hstack(self.x_rec)
+        M = np.concatenate(self.m_rec)
+        Y = np.empty((len(self.plant.output_names), len(T)))
+        for mode, mid in self.mode_index.items():
+            idx = np.nonzero(M == mid)[0]
+            fmap = self.plant.functions(mode).output_map
+            B = fmap.size2_in(0)
+            for s0 in range(0, len(idx), B):
+                sl = idx[s0:s0 + B]
+                k = len(sl)
+                Xb = np.zeros((X.shape[0], B))
+                Tb = np.full(B, T[sl[-1]])
+                Xb[:, :k], Tb[:k] = X[:, sl], T[sl]
+                Xb[:, k:] = X[:, sl[-1:]]
+                Y[:, sl] = np.asarray(fmap(Xb, Tb, self.P))[:, :k]
+        return T, X, M, Y
 
     # --- guards -------------------------------------------------------------------
     def guards(self, mf, xs, t):
@@ -220,26 +230,29 @@ class _Engine:
         t = 0.0
         mode, xs, switched = self.settle(mode, xs, t)
         self.log(switched, t)
-        mf = plant.functions(mode)
-        self.record(mf, np.array([t]), xs[:, None])
+        self.record(plant.functions(mode), np.array([t]), xs[:, None])
         frac = np.linspace(0.0, 1.0, n + 1)[1:]
+        T_long = n * dt
+        T_cur = T_long / 4  # short chunks after a switch, doubling back to n*dt
         while t < t_end * (1 - 1e-12):
             mf = plant.functions(mode)
-            T = min(n * dt, t_end - t)
+            T = min(T_cur, t_end - t)
+            T_cur = min(2 * T_cur, T_long)
             try:
-                X = np.asarray(mf.integ_grid(x0=xs, p=np.concatenate([[t, T], self.P]))["xf"])
+                Xd, Gd = mf.step(xs, [t, T], self.P)
             except RuntimeError as exc:
                 why = str(exc).splitlines()[-1]
                 hint = (" (too many steps: the loop is probably unstable with these gains or parameters)"
                         if "TOO_MUCH_WORK" in why else "")
                 raise SimulationError(f"integrator failed at t = {t:.6g} s in mode {plant.mode_dict(mode)}{hint}: "
                                       f"{why}") from None
+            X = np.asarray(Xd)
             if not np.all(np.isfinite(X)):
                 raise SimulationError(f"state became non-finite after t = {t:.6g} s in mode "
                                       f"{plant.mode_dict(mode)}: the parameters make the plant unstable")
             tg = t + T * frac
             if mf.guards:
-                G = np.asarray(mf.guard_map(X, tg, self.P))
+                G = np.asarray(Gd)
                 bad = np.nonzero((G <= 0).any(axis=0))[0]
             else:
                 bad = ()
@@ -268,6 +281,7 @@ class _Engine:
                     f"component {comp!r} {a} -> {b} ({cnt} times). Raise max_events if this is real, or check the "
                     "parameters of that component")
             mode, xs, t = new_mode, xe, te
+            T_cur = T_long / 4
             self.record(plant.functions(mode), np.array([t]), xs[:, None])
         return mode
 
@@ -275,7 +289,7 @@ class _Engine:
 def simulate(params: Parameters | None = None, model: str = "macro", t_end: float = 40.0, *,
              effects=(), remove=(), components=None, dt: float | None = None,
              rtol: float = 1e-8, atol: float = 1e-9, event_tol: float = 1e-9,
-             max_events: int = 5000, n_grid: int = 200, initial=None, initial_mode=None) -> Response:
+             max_events: int = 5000, n_grid: int = 500, initial=None, initial_mode=None) -> Response:
     """Simulate a start-up of the kiln drive on the nonlinear hybrid plant.
 
     Parameters
@@ -303,8 +317,9 @@ def simulate(params: Parameters | None = None, model: str = "macro", t_end: floa
         Width [s] to which a mode switch is located.
     max_events : int, default 5000
         Mode switches allowed before :class:`EventStormError`.
-    n_grid : int, default 200
-        Grid points per integrator call (chunk length n_grid*dt).
+    n_grid : int, default 500
+        Grid points per integrator call: chunks last n_grid*dt seconds, a
+        quarter of that after a mode switch, doubling back.
     initial : dict, optional
         Initial values of states by name, in physical units (e.g.
         ``{"omega_kiln": 0.05}``); the others start as the components say.
@@ -360,21 +375,23 @@ def simulate(params: Parameters | None = None, model: str = "macro", t_end: floa
     eng = _Engine(plant, P, event_tol, max_events)
     wall0 = time.perf_counter()
     eng.run(xs0, mode0, float(t_end), float(dt))
+    T, X, code, Y = eng.outputs()
     wall = time.perf_counter() - wall0
     build = plant.build_seconds - build0
     modes = {v: k for k, v in eng.mode_index.items()}
-    code = np.concatenate(eng.m_rec)
-    mode_arrays = {c.name: np.array([modes[i][ci] for i in code])
-                   for ci, c in enumerate(plant.moded)}
+    mode_arrays = {}
+    for ci, c in enumerate(plant.moded):
+        names = np.array([modes[i][ci] for i in range(len(modes))])
+        mode_arrays[c.name] = names[code]
     return Response(
-        t=np.concatenate(eng.t_rec),
-        outputs=dict(zip(plant.output_names, np.hstack(eng.y_rec))),
-        states=dict(zip(plant.state_names, np.hstack(eng.x_rec))),
+        t=T,
+        outputs=dict(zip(plant.output_names, Y)),
+        states=dict(zip(plant.state_names, X * plant.scales[:, None])),
         modes=mode_arrays,
         events=eng.events,
         params=params,
         model=model if components is None else "custom",
         components=names,
         info={"wall_s": wall - build, "build_s": build, "n_events": len(eng.events), "dt": dt,
-              "rtol": rtol, "event_tol": event_tol},
+              "rtol": rtol, "event_tol": event_tol, "compiled": plant.compiled},
     )

@@ -19,10 +19,13 @@ import numpy as np
 from ..errors import ModelError, close_matches_hint
 from ..params import Parameters
 from .base import NUMERIC_NAMES, OPTION_NAMES, REGISTRY, Component, Guard, ModelSpec, SymParams
+from .compiled import compile_function
 
 __all__ = ["Eqs", "Plant", "ModeFunctions", "get_plant"]
 
 GROUND = "ground"
+#: points per call of the (compiled) output function
+OUTPUT_BATCH = 1024
 
 
 class Eqs:
@@ -149,13 +152,17 @@ class ModeFunctions:
     guard : casadi.Function
         (xs, t, P) -> (g, selector, dg/dt), one entry per guard.
     guard_map : casadi.Function
-        ``guard`` g-values mapped over an output grid.
+        ``guard`` g-values mapped over the ``n_grid`` chunk grid (compiled C
+        where a compiler is available).
     output_map : casadi.Function
-        (XS, T, P) -> outputs, mapped over an output grid.
+        (XS, T, P) -> outputs, mapped over :data:`OUTPUT_BATCH` points
+        (compiled C where a compiler is available).
     integ_grid : casadi.Function
         CVODES over [t0, t0+T] returning ``n_grid`` equally spaced states.
     integ_one : casadi.Function
         CVODES over [t0, t0+T] returning the end state.
+    step : casadi.Function
+        (xs0, [t0, T], P) -> (X, G): ``integ_grid`` and ``guard_map`` in one call.
     guards : list of Guard
         Guard declarations (kind, component, targets).
     """
@@ -169,6 +176,7 @@ class ModeFunctions:
     output_map: ca.Function
     integ_grid: ca.Function
     integ_one: ca.Function
+    step: ca.Function
     guards: list
 
 
@@ -181,10 +189,13 @@ class Plant:
         Component names, in phase order (see :func:`kilnctl.model.build_plant`).
     options : dict
         Values of the string options (``friction_law`` ...).
-    n_grid : int, default 200
+    n_grid : int, default 500
         Output points per integrator call.
     rtol, atol : float
         CVODES relative tolerance and absolute tolerance on scaled states.
+    compile : bool, default True
+        Compile guards and outputs to C (cached on disk, see
+        :mod:`kilnctl.model.compiled`); the numbers are the same either way.
 
     Raises
     ------
@@ -193,7 +204,8 @@ class Plant:
         twice.
     """
 
-    def __init__(self, components, options: dict, n_grid: int = 200, rtol: float = 1e-8, atol: float = 1e-9):
+    def __init__(self, components, options: dict, n_grid: int = 500, rtol: float = 1e-8, atol: float = 1e-9,
+                 compile: bool = True):
         names = list(components)
         for nm in names:
             if nm not in REGISTRY:
@@ -219,6 +231,8 @@ class Plant:
         self._cache: dict[tuple, ModeFunctions] = {}
         self._output_names: tuple[str, ...] | None = None
         self.build_seconds = 0.0
+        self.compile = bool(compile)
+        self.compiled = False
 
     # --- numeric helpers ----------------------------------------------------
     def param_vector(self, params: Parameters) -> np.ndarray:
@@ -324,7 +338,17 @@ class Plant:
         n = self.n_grid
         guard_g = ca.Function("guard_g", [xs, t, P], [g])
         guard_map = guard_g.map(n)
-        output_map = out.map(n + 1)
+        output_map = out.map(OUTPUT_BATCH)
+        if self.compile:
+            Xs, Ts = ca.MX.sym("X", xs.numel(), n), ca.MX.sym("T", 1, n)
+            Ps = ca.MX.sym("P", P.numel())
+            if e.guards:
+                guard_map, ok_g = compile_function(
+                    ca.Function(f"guards_{len(self.state_names)}x{n}", [Xs, Ts, Ps], [guard_map(Xs, Ts, Ps)]))
+            Xo, To = ca.MX.sym("X", xs.numel(), OUTPUT_BATCH), ca.MX.sym("T", 1, OUTPUT_BATCH)
+            output_map, self.compiled = compile_function(
+                ca.Function(f"outputs_{len(self.state_names)}x{OUTPUT_BATCH}", [Xo, To, Ps],
+                            [output_map(Xo, To, Ps)]))
         tau = ca.SX.sym("tau")
         pint = ca.SX.sym("pint", 2)  # t0, T
         ode = pint[1] * ca.substitute(f, t, pint[0] + tau * pint[1])
@@ -332,7 +356,13 @@ class Plant:
         opts = {"abstol": self.atol, "reltol": self.rtol, "max_num_steps": 20000}
         integ_grid = ca.integrator("ig", "cvodes", dae, 0.0, list(np.linspace(0, 1, n + 1)[1:]), opts)
         integ_one = ca.integrator("i1", "cvodes", dae, 0.0, 1.0, opts)
-        return ModeFunctions(mode, rhs, out, project, guard, guard_map, output_map, integ_grid, integ_one, list(e.guards))
+        # one call per chunk: integrate, then evaluate every guard on the grid
+        x0m, pm, Pm = ca.MX.sym("x0", xs.numel()), ca.MX.sym("pint", 2), ca.MX.sym("P", P.numel())
+        Xm = integ_grid(x0=x0m, p=ca.vertcat(pm, Pm))["xf"]
+        Tm = pm[0] + pm[1] * ca.DM(np.linspace(0, 1, n + 1)[1:]).T
+        step = ca.Function("step", [x0m, pm, Pm], [Xm, guard_map(Xm, Tm, Pm)])
+        return ModeFunctions(mode, rhs, out, project, guard, guard_map, output_map, integ_grid, integ_one, step,
+                             list(e.guards))
 
 
 @lru_cache(maxsize=64)
@@ -340,7 +370,7 @@ def _plant_cached(names: tuple, options: tuple, n_grid: int, rtol: float, atol: 
     return Plant(names, dict(options), n_grid=n_grid, rtol=rtol, atol=atol)
 
 
-def get_plant(names, params: Parameters, n_grid: int = 200, rtol: float = 1e-8, atol: float = 1e-9) -> Plant:
+def get_plant(names, params: Parameters, n_grid: int = 500, rtol: float = 1e-8, atol: float = 1e-9) -> Plant:
     """Return the (cached) plant structure for components and options.
 
     Parameters

@@ -1,0 +1,81 @@
+"""Compile CasADi functions to C once, and cache the shared library on disk.
+
+CasADi's code generator writes C for a function; gcc turns it into a shared
+library that :func:`casadi.external` loads.  The library is named by a hash of
+the generated source, so a model structure compiled once is reused by every
+later run (and every later session on the same machine).  Without a C
+compiler the function is used as it is (CasADi's virtual machine), which is
+slower but gives the same numbers.
+
+The cache folder is ``$KILNCTL_CACHE`` or ``~/.cache/kilnctl``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import shutil
+import subprocess
+import tempfile
+from pathlib import Path
+
+import casadi as ca
+
+__all__ = ["compile_function", "cache_dir", "compiler_available"]
+
+_CC = shutil.which(os.environ.get("CC", "gcc")) or shutil.which("cc")
+
+
+def cache_dir() -> Path:
+    """Folder of compiled model libraries (created on demand)."""
+    return Path(os.environ.get("KILNCTL_CACHE", Path.home() / ".cache" / "kilnctl"))
+
+
+def compiler_available() -> bool:
+    """True when a C compiler was found (``$CC``, ``gcc`` or ``cc``)."""
+    return _CC is not None
+
+
+def compile_function(f: ca.Function) -> tuple[ca.Function, bool]:
+    """Return a compiled equivalent of ``f`` and whether compiling worked.
+
+    Parameters
+    ----------
+    f : casadi.Function
+        An SX or MX function without external plugins (no integrators).
+
+    Returns
+    -------
+    casadi.Function
+        The loaded shared library, or ``f`` itself if compiling failed.
+    bool
+        True if the compiled library is used.
+    """
+    if _CC is None or os.environ.get("KILNCTL_NO_COMPILE"):
+        return f, False
+    name = f.name()
+    with tempfile.TemporaryDirectory() as tmp:
+        src = Path(tmp) / f"{name}.c"
+        cg = ca.CodeGenerator(src.name, {"with_header": False})
+        cg.add(f)
+        cg.generate(tmp + os.sep)
+        text = src.read_bytes()
+        digest = hashlib.sha256(text + b"|O2").hexdigest()[:20]
+        folder = cache_dir()
+        lib = folder / f"{name}_{digest}.so"
+        if not lib.exists():
+            try:
+                folder.mkdir(parents=True, exist_ok=True)
+                tmp_lib = Path(tmp) / "lib.so"
+                subprocess.run([_CC, "-O2", "-fPIC", "-shared", str(src), "-o", str(tmp_lib), "-lm"],
+                               check=True, capture_output=True, timeout=300)
+                fd, staged = tempfile.mkstemp(dir=folder, suffix=".so.tmp")
+                os.close(fd)
+                shutil.copyfile(tmp_lib, staged)
+                os.replace(staged, lib)  # whole or not at all, safe against a parallel build
+            except (OSError, subprocess.SubprocessError):
+                return f, False
+    try:
+        return ca.external(name, str(lib)), True
+    except RuntimeError:
+        return f, False
