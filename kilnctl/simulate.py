@@ -241,9 +241,10 @@ class _Engine:
             try:
                 Xd, Gd = mf.step(xs, [t, T], self.P)
             except RuntimeError as exc:
-                why = str(exc).splitlines()[-1]
-                hint = (" (too many steps: the loop is probably unstable with these gains or parameters)"
-                        if "TOO_MUCH_WORK" in why else "")
+                lines = str(exc).splitlines()
+                why = next((ln.strip() for ln in lines if "CVode returned" in ln or "CV_" in ln), lines[-1])
+                hint = (" (CVODES gave up: the loop is probably unstable with these gains or parameters)"
+                        if "CV_" in str(exc) else "")
                 raise SimulationError(f"integrator failed at t = {t:.6g} s in mode {plant.mode_dict(mode)}{hint}: "
                                       f"{why}") from None
             X = np.asarray(Xd)
