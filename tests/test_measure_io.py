@@ -1,0 +1,154 @@
+"""Reading measured records: every malformed file gives an error naming file, line and column."""
+
+import hashlib
+
+import numpy as np
+import pytest
+
+from kilnctl import Parameters
+from kilnctl.errors import ConfigFileError, DataError, KilnctlError, ParameterError
+from kilnctl.measure import Measurement, load_setup, read_csv
+
+
+def _rows(n=200, dt=0.05, t0=0.0):
+    t = t0 + dt * np.arange(n)
+    ref = np.clip(74.0 * (t - t0), 0, 500)
+    return t, 100 + 2 * t, 0.98 * ref, ref
+
+
+def _write(tmp_path, text, name="rec.csv"):
+    p = tmp_path / name
+    p.write_text(text)
+    return p
+
+
+def _csv(t, i, w, r=None, header="time_s,current_A,speed_rpm,speed_ref_rpm"):
+    lines = [header]
+    for k in range(len(t)):
+        cells = [f"{t[k]:.4f}", f"{i[k]:.3f}", f"{w[k]:.3f}"] + ([f"{r[k]:.3f}"] if r is not None else [])
+        lines.append(",".join(cells))
+    return "\n".join(lines) + "\n"
+
+
+def test_good_file_reads_back_the_values_and_is_not_modified(tmp_path):
+    t, i, w, r = _rows()
+    p = _write(tmp_path, "# kiln 2, 1994-03-01\n" + _csv(t, i, w, r) + "\n")
+    digest = hashlib.sha256(p.read_bytes()).hexdigest()
+    m = read_csv(p)
+    # truth: the numbers written above
+    assert m.n == 200 and np.allclose(m.t, t, atol=1e-4) and np.allclose(m.current, i, atol=1e-3)
+    assert np.allclose(m.speed_ref, r, atol=1e-3)
+    assert hashlib.sha256(p.read_bytes()).hexdigest() == digest
+
+
+def test_semicolon_separator_and_extra_columns(tmp_path):
+    t, i, w, _ = _rows()
+    text = "time_s;current_A;speed_rpm;oil_temp_C\n" + "\n".join(
+        f"{a:.3f};{b:.3f};{c:.3f};40" for a, b, c in zip(t, i, w)) + "\n"
+    m = read_csv(_write(tmp_path, text))
+    assert m.speed_ref is None and "oil_temp_C" in m.channels
+    assert any("oil_temp_C" in s for s in m.notes)
+
+
+def test_missing_column_names_the_header_line_and_close_match(tmp_path):
+    t, i, w, _ = _rows()
+    p = _write(tmp_path, _csv(t, i, w, header="time_s,current_A,speed_rmp"))
+    with pytest.raises(DataError, match=r"rec.csv: line 1 \(header\): missing column 'speed_rpm'.*speed_rmp"):
+        read_csv(p)
+
+
+def test_non_numeric_cell_names_line_and_column(tmp_path):
+    t, i, w, r = _rows()
+    lines = _csv(t, i, w, r).splitlines()
+    lines[10] = lines[10].replace(lines[10].split(",")[1], "abc")
+    p = _write(tmp_path, "\n".join(lines))
+    with pytest.raises(DataError, match=r"rec.csv: line 11, column 'current_A': 'abc' is not a number"):
+        read_csv(p)
+
+
+def test_empty_cell_and_nan_are_missing_values(tmp_path):
+    t, i, w, r = _rows()
+    lines = _csv(t, i, w, r).splitlines()
+    cells = lines[5].split(",")
+    cells[2] = ""
+    lines[5] = ",".join(cells)
+    with pytest.raises(DataError, match=r"line 6, column 'speed_rpm': empty cell"):
+        read_csv(_write(tmp_path, "\n".join(lines)))
+    cells[2] = "nan"
+    lines[5] = ",".join(cells)
+    with pytest.raises(DataError, match=r"line 6, column 'speed_rpm': NaN"):
+        read_csv(_write(tmp_path, "\n".join(lines), "b.csv"))
+
+
+def test_non_increasing_time(tmp_path):
+    t, i, w, r = _rows()
+    t[50] = t[49]  # sample 50 is on line 52 (header on line 1)
+    with pytest.raises(DataError, match=r"line 52, column 'time_s': time .* is not after"):
+        read_csv(_write(tmp_path, _csv(t, i, w, r)))
+
+
+def test_gap_is_a_step_above_five_medians(tmp_path):
+    t, i, w, r = _rows()
+    t[120:] += 0.3  # one step of 0.35 s = 7 x the 0.05 s median
+    with pytest.raises(DataError, match=r"line 122, column 'time_s': gap of 0.35 s"):
+        read_csv(_write(tmp_path, _csv(t, i, w, r)))
+    t2, i2, w2, r2 = _rows()
+    t2[120:] += 0.15  # a step of 0.2 s = 4 medians is not a gap
+    read_csv(_write(tmp_path, _csv(t2, i2, w2, r2), "ok.csv"))
+
+
+@pytest.mark.parametrize("n,dt", [(40, 0.1), (300, 0.005)])
+def test_too_short(tmp_path, n, dt):
+    t, i, w, r = _rows(n=n, dt=dt)
+    with pytest.raises(DataError, match="too short"):
+        read_csv(_write(tmp_path, _csv(t, i, w, r)))
+
+
+def test_speed_in_rad_per_s_is_refused(tmp_path):
+    t, i, w, r = _rows()
+    # truth: 500 rpm = 52.36 rad/s, below the ~60 that 500 rpm cannot be
+    with pytest.raises(DataError, match=r"column 'speed_rpm': largest value 51.31 looks like rad/s"):
+        read_csv(_write(tmp_path, _csv(t, i, w / 9.5493, r)))
+    with pytest.raises(DataError, match="kiln speed"):
+        read_csv(_write(tmp_path, _csv(t, i, w / 1076.5, r), "k.csv"))
+    with pytest.raises(DataError, match="current_A.*looks like kA"):
+        read_csv(_write(tmp_path, _csv(t, i / 1000, w, r), "ka.csv"))
+
+
+def test_row_length_and_missing_file(tmp_path):
+    t, i, w, r = _rows()
+    lines = _csv(t, i, w, r).splitlines()
+    lines[7] += ",5"
+    with pytest.raises(DataError, match="line 8: 5 cells"):
+        read_csv(_write(tmp_path, "\n".join(lines)))
+    with pytest.raises(DataError, match="no such measurement file"):
+        read_csv(tmp_path / "nope.csv")
+
+
+def test_errors_are_value_errors_too():
+    assert issubclass(DataError, ValueError) and issubclass(DataError, KilnctlError)
+
+
+def test_experiment_from_recorded_reference_finds_start_and_rate():
+    # truth: the ramp written here starts at 1.5 s and rises at 60 rpm/s to 450 rpm
+    t = np.arange(0, 20, 0.02)
+    ref = np.clip(60.0 * (t - 1.5), 0, 450)
+    m = Measurement.from_arrays(t, 100 + 0 * t, ref, ref)
+    ex = m.experiment(Parameters())
+    assert ex.t0 == pytest.approx(1.5, abs=1e-6) and ex.ramp_rate == pytest.approx(60.0)
+    assert ex.omega_ref == pytest.approx(450.0)
+    assert any("differs from the setup" in s for s in ex.notes)
+
+
+def test_setup_file_with_measurement_section(tmp_path):
+    p = tmp_path / "setup.toml"
+    p.write_text('[controller]\ngains = "given"\nk_p = 2.0\n[kiln]\nm_v = 6e5\n'
+                 '[measurement]\nt0_s = 0.5\ncalibrate = ["mu_c", "m_v"]\n')
+    s = load_setup(p)
+    assert s.params.m_v == 6e5 and s.params.gains == "given" and s.options["calibrate"] == ["mu_c", "m_v"]
+    p.write_text('[measurement]\nt0 = 0.5\n')
+    with pytest.raises(ConfigFileError, match="t0_s"):
+        load_setup(p)
+    p.write_text('[kiln]\nm_vv = 1.0\n')
+    with pytest.raises(ParameterError, match="setup.toml.*m_v"):
+        load_setup(p)
