@@ -1,18 +1,21 @@
 """Hybrid (mode-switching) simulation of the kiln drive.
 
-Each mode combination is smooth and is integrated by CVODES (BDF, exact
-CasADi Jacobians) over chunks of the horizon, returning states on a grid.
-Guards are evaluated on that grid in one compiled call; a sign change is
-located by Illinois root finding on re-integration from the last grid point,
-to ``event_tol`` seconds.  The mode then switches and, if the new mode is
+Each mode combination is smooth.  By default it is integrated by a compiled
+ROS3P Rosenbrock stepper (:mod:`kilnctl.model.stepper`: CasADi-generated C for
+the right-hand side, Jacobian and guards, driven by ``rosenbrock.c``) that
+checks every guard after every accepted step and locates a crossing by
+Illinois root finding on real integrator steps, to ``event_tol`` seconds.
+The alternative (``method='cvodes'``) integrates with CVODES (BDF) over
+chunks and samples the guards every ``dt``.  The mode then switches and, if the new mode is
 itself left at once, the switch cascades; a zero-time cycle of modes is
 resolved by the component's Filippov sliding mode (the burden's ``held``
 mode) or reported as :class:`EventStormError` naming the mode pair.
 
-Guards are sampled every ``dt`` seconds: an excursion shorter than ``dt``
-that starts and ends between two samples is not seen (choose ``dt`` below
-the shortest effect you care about; the defaults resolve the mesh's 290 Hz
-mode in the micro model).
+With ``method='cvodes'`` guards are sampled every ``dt`` seconds, so an
+excursion shorter than ``dt`` between two samples is not seen; the compiled
+stepper checks after every step (at most ``max_step``, default 10*dt).
+Outputs are sampled on the global grid k*dt plus every event point (twice:
+before and after the switch).
 """
 
 from __future__ import annotations
@@ -25,11 +28,17 @@ import numpy as np
 
 from .errors import EventStormError, ParameterError, SimulationError, close_matches_hint
 from .model import Guard, component_names, get_plant
+from .model.stepper import STATUS
 from .params import Parameters
 from .response import Event, Response
 
 __all__ = ["simulate", "resolve_gains", "DEFAULT_DT"]
 
+#: a guard has crossed when it is below -GUARD_EPS (guards are scaled to order one), so a guard that
+#: starts on its boundary does not fire on round-off
+GUARD_EPS = 1e-9
+#: a scaled state beyond this is a runaway (the loop is unstable), reported as an error
+RUNAWAY = 1e6
 #: default output and guard-sampling step per model [s]
 DEFAULT_DT = {"macro": 5e-3, "micro": 1e-3}
 
@@ -76,6 +85,7 @@ class _Engine:
         self.x_rec: list[np.ndarray] = []
         self.m_rec: list[np.ndarray] = []
         self.mode_index: dict[tuple, int] = {}
+        self.n_steps = 0
 
     # --- recording ------------------------------------------------------------
     def _mid(self, mode):
@@ -99,7 +109,11 @@ class _Engine:
         Y = np.empty((len(self.plant.output_names), len(T)))
         for mode, mid in self.mode_index.items():
             idx = np.nonzero(M == mid)[0]
-            fmap = self.plant.functions(mode).output_map
+            mf = self.plant.functions(mode)
+            if mf.stepper is not None:
+                Y[:, idx] = mf.stepper.outputs(self.P, T[idx], X[:, idx])
+                continue
+            fmap = mf.output_map
             B = fmap.size2_in(0)
             for s0 in range(0, len(idx), B):
                 sl = idx[s0:s0 + B]
@@ -224,7 +238,64 @@ class _Engine:
             self.pairs[(gd.component, m_from[i], m_to[i])] += 1
 
     # --- main loop -------------------------------------------------------------
+    def run_stepped(self, xs, mode, t_end, dt, rtol, atol, hmax):
+        """Main loop on the compiled ROS3P steppers (guards checked after every step)."""
+        plant = self.plant
+        t = 0.0
+        mode, xs, switched = self.settle(mode, xs, t)
+        self.log(switched, t)
+        self.record(plant.functions(mode), np.array([t]), xs[:, None])
+        h = 0.0
+        while t < t_end * (1 - 1e-12):
+            mf = plant.functions(mode)
+            if mf.stepper is None:
+                raise SimulationError("method 'ros3p' needs a C compiler (gcc or $CC); use method='cvodes'")
+            r = mf.stepper.run(self.P, t, t_end, xs, dt, rtol, atol, hmax, h, self.event_tol, max_out=16384)
+            st = r["status"]
+            self.check_bounded(r["x"], r["x_ev"], t, mode)
+            self.record(mf, r["t"], r["x"])
+            self.n_steps += r["n_steps"]
+            if st < 0:
+                raise SimulationError(
+                    f"integrator failed after t = {t:.6g} s in mode {plant.mode_dict(mode)}: {STATUS.get(st, st)} "
+                    "(the loop is probably unstable with these gains or parameters)")
+            te, xe, h = r["t_ev"], r["x_ev"], r["h"]
+            if st == 0:
+                break
+            if st == 2:
+                t, xs = te, xe
+                continue
+            self.record(mf, np.array([te]), xe[:, None])
+            new_mode, xe, switched = self.settle(mode, xe, te, first=r["j_ev"])
+            self.log(switched, te)
+            if len(self.events) > self.max_events:
+                self._storm(te)
+            mode, xs, t = new_mode, xe, te
+            h = 0.0
+            self.record(plant.functions(mode), np.array([t]), xs[:, None])
+        return mode
+
+    def check_bounded(self, X, x_end, t, mode):
+        """Raise if a (scaled) state ran away: beyond RUNAWAY times its nominal scale."""
+        big = np.abs(x_end) > RUNAWAY
+        if X.size:
+            big |= (np.abs(X) > RUNAWAY).any(axis=1)
+        if big.any():
+            i = int(np.nonzero(big)[0][0])
+            raise SimulationError(
+                f"state {self.plant.state_names[i]!r} ran away (beyond {RUNAWAY:.0e} times its nominal scale "
+                f"{self.plant.scales[i]:g}) after t = {t:.6g} s in mode {self.plant.mode_dict(mode)}: the loop is "
+                "unstable with these gains or parameters")
+
+    def _storm(self, te):
+        (comp, a, b), cnt = self.pairs.most_common(1)[0]
+        raise EventStormError(
+            f"more than max_events = {self.max_events} mode switches by t = {te:.6g} s; most frequent: "
+            f"component {comp!r} {a} -> {b} ({cnt} times). Raise max_events if this is real, or check the "
+            "parameters of that component")
+
     def run(self, xs, mode, t_end, dt):
+        """Main loop on CVODES chunks (guards sampled on the output grid)."""
         plant = self.plant
         n = plant.n_grid
         t = 0.0
@@ -233,13 +304,19 @@ class _Engine:
         self.record(plant.functions(mode), np.array([t]), xs[:, None])
         frac = np.linspace(0.0, 1.0, n + 1)[1:]
         T_long = n * dt
-        T_cur = T_long / 4  # short chunks after a switch, doubling back to n*dt
         while t < t_end * (1 - 1e-12):
             mf = plant.functions(mode)
-            T = min(T_cur, t_end - t)
-            T_cur = min(2 * T_cur, T_long)
+            # chunks start on the global grid k*dt (after an event: one step to the next grid point)
+            t_grid = math.ceil(t / dt * (1 - 1e-14)) * dt
+            partial = t_grid - t > 1e-12 * max(1.0, t)
+            T = min(t_grid - t, t_end - t) if partial else min(T_long, t_end - t)
             try:
-                Xd, Gd = mf.step(xs, [t, T], self.P)
+                if partial:
+                    X = np.asarray(mf.integ_one(x0=xs, p=np.concatenate([[t, T], self.P]))["xf"])
+                    Gd = self.guards(mf, X[:, 0], t + T)[0][:, None]
+                else:
+                    Xd, Gd = mf.step(xs, [t, T], self.P)
+                    X = np.asarray(Xd)
             except RuntimeError as exc:
                 lines = str(exc).splitlines()
                 why = next((ln.strip() for ln in lines if "CVode returned" in ln or "CV_" in ln), lines[-1])
@@ -247,14 +324,14 @@ class _Engine:
                         if "CV_" in str(exc) else "")
                 raise SimulationError(f"integrator failed at t = {t:.6g} s in mode {plant.mode_dict(mode)}{hint}: "
                                       f"{why}") from None
-            X = np.asarray(Xd)
             if not np.all(np.isfinite(X)):
                 raise SimulationError(f"state became non-finite after t = {t:.6g} s in mode "
                                       f"{plant.mode_dict(mode)}: the parameters make the plant unstable")
-            tg = t + T * frac
+            self.check_bounded(X, X[:, -1], t, mode)
+            tg = np.array([t + T]) if partial else t + T * frac
             if mf.guards:
                 G = np.asarray(Gd)
-                bad = np.nonzero((G <= 0).any(axis=0))[0]
+                bad = np.nonzero((G < -GUARD_EPS).any(axis=0))[0]
             else:
                 bad = ()
             if len(bad) == 0:
@@ -266,7 +343,7 @@ class _Engine:
             x_left = xs if k == 0 else X[:, k - 1]
             g_left = self.guards(mf, x_left, t_left)[0]
             best = None
-            for j in np.nonzero(G[:, k] <= 0)[0]:
+            for j in np.nonzero(G[:, k] < -GUARD_EPS)[0]:
                 te, xe = self.locate(mf, int(j), t_left, x_left, tg[k], g_left[j], G[j, k])
                 if best is None or te < best[0]:
                     best = (te, xe, int(j))
@@ -276,21 +353,17 @@ class _Engine:
             new_mode, xe, switched = self.settle(mode, xe, te, first=j)
             self.log(switched, te)
             if len(self.events) > self.max_events:
-                (comp, a, b), cnt = self.pairs.most_common(1)[0]
-                raise EventStormError(
-                    f"more than max_events = {self.max_events} mode switches by t = {te:.6g} s; most frequent: "
-                    f"component {comp!r} {a} -> {b} ({cnt} times). Raise max_events if this is real, or check the "
-                    "parameters of that component")
+                self._storm(te)
             mode, xs, t = new_mode, xe, te
-            T_cur = T_long / 4
             self.record(plant.functions(mode), np.array([t]), xs[:, None])
         return mode
 
 
 def simulate(params: Parameters | None = None, model: str = "macro", t_end: float = 40.0, *,
              effects=(), remove=(), components=None, dt: float | None = None,
-             rtol: float = 1e-8, atol: float = 1e-9, event_tol: float = 1e-9,
-             max_events: int = 5000, n_grid: int = 500, initial=None, initial_mode=None) -> Response:
+             rtol: float = 1e-7, atol: float = 1e-8, event_tol: float = 1e-9,
+             max_events: int = 5000, n_grid: int = 500, initial=None, initial_mode=None,
+             method: str = "auto", max_step: float | None = None) -> Response:
     """Simulate a start-up of the kiln drive on the nonlinear hybrid plant.
 
     Parameters
@@ -312,15 +385,25 @@ def simulate(params: Parameters | None = None, model: str = "macro", t_end: floa
         The full component list, instead of ``model``/``effects``/``remove``.
     dt : float, optional
         Output and guard-sampling step [s] (default 5 ms macro, 1 ms micro).
-    rtol, atol : float
-        CVODES tolerances (atol on states scaled to order one).
+    rtol, atol : float, default 1e-7, 1e-8
+        Integrator tolerances (atol on states scaled to order one).  At the
+        defaults, peak and final currents and stresses are within about 1e-6
+        (relative) of a run at rtol 1e-11 (``benchmarks/``).
     event_tol : float, default 1e-9
         Width [s] to which a mode switch is located.
     max_events : int, default 5000
         Mode switches allowed before :class:`EventStormError`.
+    method : {'auto', 'ros3p', 'cvodes'}, default 'auto'
+        ``'ros3p'``: the compiled stepper (:mod:`kilnctl.model.stepper`,
+        guards checked after every integrator step); ``'cvodes'``: CasADi's
+        CVODES over chunks, guards sampled every ``dt``; ``'auto'``: ros3p
+        when a C compiler is available.  The two agree to about 1e-6 at tight
+        tolerances (tests/test_engines_agree.py).
+    max_step : float, optional
+        ``method='ros3p'`` only: largest step [s] (default 10*dt).
     n_grid : int, default 500
-        Grid points per integrator call: chunks last n_grid*dt seconds, a
-        quarter of that after a mode switch, doubling back.
+        ``method='cvodes'`` only: grid points per integrator call (chunks of
+        n_grid*dt seconds).
     initial : dict, optional
         Initial values of states by name, in physical units (e.g.
         ``{"omega_kiln": 0.05}``); the others start as the components say.
@@ -347,6 +430,8 @@ def simulate(params: Parameters | None = None, model: str = "macro", t_end: floa
         raise ParameterError(f"params must be a kilnctl.Parameters, not {type(params).__name__}")
     dt = DEFAULT_DT.get(model, 1e-3) if dt is None else dt
     _check_horizon(t_end, dt)
+    if method not in ("auto", "cvodes", "ros3p"):
+        raise SimulationError(f"method = {method!r}: choose 'auto', 'ros3p' (compiled stepper) or 'cvodes'")
     if isinstance(max_events, bool) or not isinstance(max_events, int) or max_events < 1:
         raise SimulationError(f"max_events = {max_events!r} must be a positive integer")
     names = tuple(components) if components is not None else component_names(model, effects, remove)
@@ -375,7 +460,13 @@ def simulate(params: Parameters | None = None, model: str = "macro", t_end: floa
         mode0 = mode0[:i] + (m,) + mode0[i + 1:]
     eng = _Engine(plant, P, event_tol, max_events)
     wall0 = time.perf_counter()
-    eng.run(xs0, mode0, float(t_end), float(dt))
+    if method == "auto":
+        method = "ros3p" if plant.functions(mode0).stepper is not None else "cvodes"
+    if method == "ros3p":
+        hmax = 10 * dt if max_step is None else float(max_step)
+        eng.run_stepped(xs0, mode0, float(t_end), float(dt), rtol, atol, hmax)
+    else:
+        eng.run(xs0, mode0, float(t_end), float(dt))
     T, X, code, Y = eng.outputs()
     wall = time.perf_counter() - wall0
     build = plant.build_seconds - build0
@@ -394,5 +485,6 @@ def simulate(params: Parameters | None = None, model: str = "macro", t_end: floa
         model=model if components is None else "custom",
         components=names,
         info={"wall_s": wall - build, "build_s": build, "n_events": len(eng.events), "dt": dt,
-              "rtol": rtol, "event_tol": event_tol, "compiled": plant.compiled},
+              "rtol": rtol, "event_tol": event_tol, "compiled": plant.compiled, "method": method,
+              "n_steps": eng.n_steps},
     )

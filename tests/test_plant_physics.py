@@ -26,7 +26,7 @@ def test_coulomb_pendulum_exact_energy_decrement():
     # Truth: energy balance between turning points a -> b with kinetic wall torque mu_c*m*g*R*cos(psi):
     #   L*(cos b - cos a) = mu_c*R*|sin b - sin a|   (exact, any amplitude: potential lost = work of friction)
     p = Parameters(mu_c=0.005, mu_s=0.05, psi_0=0.3)
-    r = simulate(p, components=PENDULUM, t_end=40.0, dt=1e-3)
+    r = simulate(p, components=PENDULUM, t_end=40.0, dt=1e-3, rtol=1e-10, atol=1e-11)
     tp = [p.psi_0] + _turning_points(r)
     assert len(tp) >= 4
     for a, b in zip(tp[:-1], tp[1:]):

@@ -20,6 +20,7 @@ from ..errors import ModelError, close_matches_hint
 from ..params import Parameters
 from .base import NUMERIC_NAMES, OPTION_NAMES, REGISTRY, Component, Guard, ModelSpec, SymParams
 from .compiled import compile_function
+from .stepper import build_stepper
 
 __all__ = ["Eqs", "Plant", "ModeFunctions", "get_plant"]
 
@@ -163,6 +164,9 @@ class ModeFunctions:
         CVODES over [t0, t0+T] returning the end state.
     step : casadi.Function
         (xs0, [t0, T], P) -> (X, G): ``integ_grid`` and ``guard_map`` in one call.
+    stepper : Stepper or None
+        Compiled ROS3P stepper of this mode (:mod:`kilnctl.model.stepper`),
+        None without a C compiler.
     guards : list of Guard
         Guard declarations (kind, component, targets).
     """
@@ -177,6 +181,7 @@ class ModeFunctions:
     integ_grid: ca.Function
     integ_one: ca.Function
     step: ca.Function
+    stepper: object
     guards: list
 
 
@@ -336,19 +341,12 @@ class Plant:
                             for i, nm in enumerate(self.state_names)])
         project = ca.Function("project", [xs, P], [proj])
         n = self.n_grid
+        stepper = build_stepper(f, xs, t, P, g, y) if self.compile else None
+        if stepper is not None:
+            self.compiled = True
         guard_g = ca.Function("guard_g", [xs, t, P], [g])
         guard_map = guard_g.map(n)
         output_map = out.map(OUTPUT_BATCH)
-        if self.compile:
-            Xs, Ts = ca.MX.sym("X", xs.numel(), n), ca.MX.sym("T", 1, n)
-            Ps = ca.MX.sym("P", P.numel())
-            if e.guards:
-                guard_map, ok_g = compile_function(
-                    ca.Function(f"guards_{len(self.state_names)}x{n}", [Xs, Ts, Ps], [guard_map(Xs, Ts, Ps)]))
-            Xo, To = ca.MX.sym("X", xs.numel(), OUTPUT_BATCH), ca.MX.sym("T", 1, OUTPUT_BATCH)
-            output_map, self.compiled = compile_function(
-                ca.Function(f"outputs_{len(self.state_names)}x{OUTPUT_BATCH}", [Xo, To, Ps],
-                            [output_map(Xo, To, Ps)]))
         tau = ca.SX.sym("tau")
         pint = ca.SX.sym("pint", 2)  # t0, T
         ode = pint[1] * ca.substitute(f, t, pint[0] + tau * pint[1])
@@ -356,13 +354,23 @@ class Plant:
         opts = {"abstol": self.atol, "reltol": self.rtol, "max_num_steps": 20000}
         integ_grid = ca.integrator("ig", "cvodes", dae, 0.0, list(np.linspace(0, 1, n + 1)[1:]), opts)
         integ_one = ca.integrator("i1", "cvodes", dae, 0.0, 1.0, opts)
+        if self.compile and stepper is None:  # the CVODES path's maps, compiled when no stepper is
+            Xs, Ts = ca.MX.sym("X", xs.numel(), n), ca.MX.sym("T", 1, n)
+            Ps = ca.MX.sym("P", P.numel())
+            if e.guards:
+                guard_map, _ = compile_function(
+                    ca.Function(f"guards_{len(self.state_names)}x{n}", [Xs, Ts, Ps], [guard_map(Xs, Ts, Ps)]))
+            Xo, To = ca.MX.sym("X", xs.numel(), OUTPUT_BATCH), ca.MX.sym("T", 1, OUTPUT_BATCH)
+            output_map, self.compiled = compile_function(
+                ca.Function(f"outputs_{len(self.state_names)}x{OUTPUT_BATCH}", [Xo, To, Ps],
+                            [output_map(Xo, To, Ps)]))
         # one call per chunk: integrate, then evaluate every guard on the grid
         x0m, pm, Pm = ca.MX.sym("x0", xs.numel()), ca.MX.sym("pint", 2), ca.MX.sym("P", P.numel())
         Xm = integ_grid(x0=x0m, p=ca.vertcat(pm, Pm))["xf"]
         Tm = pm[0] + pm[1] * ca.DM(np.linspace(0, 1, n + 1)[1:]).T
         step = ca.Function("step", [x0m, pm, Pm], [Xm, guard_map(Xm, Tm, Pm)])
         return ModeFunctions(mode, rhs, out, project, guard, guard_map, output_map, integ_grid, integ_one, step,
-                             list(e.guards))
+                             stepper, list(e.guards))
 
 
 @lru_cache(maxsize=64)

@@ -36,6 +36,71 @@ def compiler_available() -> bool:
     return _CC is not None
 
 
+def compile_sources(stem: str, sources: dict[str, bytes]) -> Path | None:
+    """Compile C sources into a shared library in the cache, named by their hash.
+
+    Parameters
+    ----------
+    stem : str
+        Start of the library file name.
+    sources : dict of str to bytes
+        File name -> C source.
+
+    Returns
+    -------
+    Path or None
+        The library, or None without a compiler or when compiling fails.
+    """
+    if _CC is None or os.environ.get("KILNCTL_NO_COMPILE"):
+        return None
+    h = hashlib.sha256(b"|O2|")
+    for name in sorted(sources):
+        h.update(name.encode() + b"\0" + sources[name])
+    folder = cache_dir()
+    lib = folder / f"{stem}_{h.hexdigest()[:20]}.so"
+    if lib.exists():
+        return lib
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryDirectory() as tmp:
+            paths = []
+            for name, text in sources.items():
+                p = Path(tmp) / name
+                p.write_bytes(text)
+                paths.append(str(p))
+            tmp_lib = Path(tmp) / "lib.so"
+            subprocess.run([_CC, "-O2", "-fPIC", "-shared", *paths, "-o", str(tmp_lib), "-lm"],
+                           check=True, capture_output=True, timeout=300)
+            fd, staged = tempfile.mkstemp(dir=folder, suffix=".so.tmp")
+            os.close(fd)
+            shutil.copyfile(tmp_lib, staged)
+            os.replace(staged, lib)  # whole or not at all, safe against a parallel build
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return lib
+
+
+def generate_c(functions, name: str = "gen") -> bytes:
+    """C source of CasADi functions (one translation unit, no header).
+
+    Parameters
+    ----------
+    functions : sequence of casadi.Function
+    name : str
+        Base file name used by the generator.
+
+    Returns
+    -------
+    bytes
+    """
+    with tempfile.TemporaryDirectory() as tmp:
+        cg = ca.CodeGenerator(f"{name}.c", {"with_header": False})
+        for f in functions:
+            cg.add(f)
+        cg.generate(tmp + os.sep)
+        return (Path(tmp) / f"{name}.c").read_bytes()
+
+
 def compile_function(f: ca.Function) -> tuple[ca.Function, bool]:
     """Return a compiled equivalent of ``f`` and whether compiling worked.
 
@@ -51,31 +116,10 @@ def compile_function(f: ca.Function) -> tuple[ca.Function, bool]:
     bool
         True if the compiled library is used.
     """
-    if _CC is None or os.environ.get("KILNCTL_NO_COMPILE"):
+    lib = compile_sources(f.name(), {f"{f.name()}.c": generate_c([f], f.name())})
+    if lib is None:
         return f, False
-    name = f.name()
-    with tempfile.TemporaryDirectory() as tmp:
-        src = Path(tmp) / f"{name}.c"
-        cg = ca.CodeGenerator(src.name, {"with_header": False})
-        cg.add(f)
-        cg.generate(tmp + os.sep)
-        text = src.read_bytes()
-        digest = hashlib.sha256(text + b"|O2").hexdigest()[:20]
-        folder = cache_dir()
-        lib = folder / f"{name}_{digest}.so"
-        if not lib.exists():
-            try:
-                folder.mkdir(parents=True, exist_ok=True)
-                tmp_lib = Path(tmp) / "lib.so"
-                subprocess.run([_CC, "-O2", "-fPIC", "-shared", str(src), "-o", str(tmp_lib), "-lm"],
-                               check=True, capture_output=True, timeout=300)
-                fd, staged = tempfile.mkstemp(dir=folder, suffix=".so.tmp")
-                os.close(fd)
-                shutil.copyfile(tmp_lib, staged)
-                os.replace(staged, lib)  # whole or not at all, safe against a parallel build
-            except (OSError, subprocess.SubprocessError):
-                return f, False
     try:
-        return ca.external(name, str(lib)), True
+        return ca.external(f.name(), str(lib)), True
     except RuntimeError:
         return f, False
