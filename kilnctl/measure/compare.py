@@ -1,0 +1,372 @@
+"""Compare a model with a measured record: fit %, residual tests, and where it fails.
+
+>>> from kilnctl.measure import compare, read_csv            # doctest: +SKIP
+>>> c = compare(read_csv("rec.csv"), params)                  # doctest: +SKIP
+>>> c.fit                                                     # doctest: +SKIP
+{'current_A': 62.1, 'speed_rpm': 99.2}
+>>> c.failing[0]["text"]                                      # doctest: +SKIP
+'0.0-6.8 s (ramp): measured peak 316 A, model 280 A (model low by 36 A on average)'
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..params import Parameters
+from .io import Experiment, Measurement
+from .runner import CHANNELS, ModelRun, fixed_gains, kiln_angle, run_model
+from .stats import autocorr, crosscorr, failing_intervals, fit_percent, residual_spectrum, robust_sigma
+
+__all__ = ["Comparison", "ChannelComparison", "compare", "compare_run"]
+
+#: default largest correlation lag [s]
+MAX_LAG_S = 5.0
+
+
+@dataclass
+class ChannelComparison:
+    """Measured and model signal of one channel and the tests of their residual.
+
+    Attributes
+    ----------
+    name, unit : str
+        Column name and unit.
+    measured, model, residual : ndarray
+        Signals at the compared times; residual = measured - model.
+    fit : float
+        Fit % (MATLAB ``compare``).
+    bias : float
+        Mean residual [unit] (positive: model low).
+    rms : float
+        Root-mean-square residual [unit].
+    sigma : float
+        Robust residual scale 1.4826 median|e| [unit].
+    whiteness : dict
+        :func:`~kilnctl.measure.stats.autocorr` result (lags in samples).
+    xcorr : dict of str to dict
+        Cross-correlation with the input (``speed_ref_rpm``) and the other
+        measured channel, :func:`~kilnctl.measure.stats.crosscorr` results.
+    spectrum : dict
+        :func:`~kilnctl.measure.stats.residual_spectrum` result.
+    failing : list of dict
+        Intervals with |residual| > 3 sigma: ``t_start``, ``t_end`` [s],
+        ``phase``, ``measured_peak``, ``model_peak``, ``mean_residual``,
+        ``text``.
+    """
+
+    name: str
+    unit: str
+    measured: np.ndarray
+    model: np.ndarray
+    residual: np.ndarray
+    fit: float
+    bias: float
+    rms: float
+    sigma: float
+    whiteness: dict
+    xcorr: dict
+    spectrum: dict
+    failing: list
+
+    def to_dict(self) -> dict:
+        """Return the statistics (not the signals) as a JSON-ready dictionary."""
+        return {
+            "fit_percent": _num(self.fit), "bias": self.bias, "rms": self.rms, "sigma_robust": self.sigma,
+            "unit": self.unit,
+            "whiteness": {"n_lags": int(self.whiteness["lags"][-1]), "band": self.whiteness["band"],
+                          "n_outside": self.whiteness["n_outside"],
+                          "fraction_outside": self.whiteness["fraction_outside"]},
+            "xcorr": {k: {"band": v["band"], "n_outside": v["n_outside"], "fraction_outside": v["fraction_outside"],
+                          "max_abs": float(np.max(np.abs(v["r"])))} for k, v in self.xcorr.items()},
+            "spectrum": {"dominant_hz": self.spectrum["dominant_hz"], "peak_ratio": _num(self.spectrum["peak_ratio"])},
+            "failing": [{k: v for k, v in f.items()} for f in self.failing],
+        }
+
+
+def _num(v):
+    return None if v is None or not math.isfinite(v) else float(v)
+
+
+@dataclass
+class Comparison:
+    """A model compared with a measured record.
+
+    Attributes
+    ----------
+    t : ndarray
+        Compared times [s] (record time, from the start-up on).
+    channels : dict of str to ChannelComparison
+        ``current_A`` and ``speed_rpm``.
+    experiment : Experiment
+        Start time and ramp that were simulated.
+    model : str
+        ``macro`` or ``micro``.
+    effects : tuple of str
+        Effects added to the model.
+    params : Parameters
+        Parameters simulated.
+    phases : list of dict
+        Phases of the start-up in the model (``name``, ``t_start``, ``t_end``
+        [s]): ramp, burden stuck, burden slipping.
+    dt : float
+        Median sample step [s].
+    source : str
+        The record's file.
+    """
+
+    t: np.ndarray
+    channels: dict
+    experiment: Experiment
+    model: str
+    effects: tuple
+    params: Parameters
+    phases: list
+    dt: float
+    source: str
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def fit(self) -> dict:
+        """Fit % per channel (MATLAB ``compare``)."""
+        return {k: c.fit for k, c in self.channels.items()}
+
+    @property
+    def failing(self) -> list:
+        """Failing intervals of every channel, in time order (dicts with ``channel``)."""
+        out = [dict(f, channel=k) for k, c in self.channels.items() for f in c.failing]
+        return sorted(out, key=lambda f: f["t_start"])
+
+    def to_dict(self) -> dict:
+        """Return the comparison as a JSON-ready dictionary.
+
+        Returns
+        -------
+        dict
+            ``source``, ``model``, ``effects``, ``experiment``, ``fit_percent``
+            per channel, ``channels`` (statistics per channel), ``failing``
+            (all intervals in time order, with their text), ``phases``.
+        """
+        return {
+            "source": self.source, "model": self.model, "effects": list(self.effects),
+            "experiment": self.experiment.to_dict(),
+            "fit_percent": {k: _num(v) for k, v in self.fit.items()},
+            "channels": {k: c.to_dict() for k, c in self.channels.items()},
+            "failing": self.failing,
+            "phases": self.phases,
+        }
+
+    def summary_lines(self) -> list[str]:
+        """Return a short human-readable summary, one line per item."""
+        lines = [f"{self.source}: {self.model} model" + (f" + {', '.join(self.effects)}" if self.effects else "")]
+        for k, c in self.channels.items():
+            w = c.whiteness
+            lines.append(f"  {k:<10} fit {c.fit:6.1f} %   rms {c.rms:.4g} {c.unit}   bias {c.bias:+.3g} {c.unit}   "
+                         f"residual autocorr outside 99 % band at {w['n_outside']}/{len(w['lags']) - 1} lags   "
+                         f"dominant {c.spectrum['dominant_hz']:.2f} Hz")
+        fails = self.failing
+        if fails:
+            lines.append("  where it fails (|residual| > 3 sigma):")
+            lines += [f"    {f['channel']}: {f['text']}" for f in fails]
+        else:
+            lines.append("  no interval with |residual| > 3 sigma")
+        for note in self.experiment.notes:
+            lines.append(f"  note: {note}")
+        return lines
+
+    def plot(self, fig=None, compare_with: "Comparison | None" = None, labels=("model", "extended model")):
+        """Draw measured vs model, residuals, autocorrelation and spectrum per channel.
+
+        Failing intervals are shaded.  With ``compare_with`` (e.g. the model
+        after diagnosis) its signal and residual are drawn too.
+
+        Parameters
+        ----------
+        fig : matplotlib.figure.Figure, optional
+            Figure to draw into (a new one by default).
+        compare_with : Comparison, optional
+            A second comparison on the same record.
+        labels : tuple of str
+            Legend names of this model and of ``compare_with``.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+        """
+        from matplotlib.figure import Figure
+
+        if fig is None:
+            fig = Figure(figsize=(13, 3.2 * len(self.channels)))
+        axes = fig.subplots(len(self.channels), 4, squeeze=False,
+                            gridspec_kw={"width_ratios": [3, 3, 2, 2]})
+        for row, (k, c) in enumerate(self.channels.items()):
+            a0, a1, a2, a3 = axes[row]
+            a0.plot(self.t, c.measured, color="k", lw=0.8, label="measured")
+            a0.plot(self.t, c.model, color="C0", lw=1.2, label=labels[0])
+            a1.plot(self.t, c.residual, color="C0", lw=0.8, label=labels[0])
+            if compare_with is not None:
+                o = compare_with.channels[k]
+                a0.plot(compare_with.t, o.model, color="C3", lw=1.2, ls="--", label=labels[1])
+                a1.plot(compare_with.t, o.residual, color="C3", lw=0.8, alpha=0.8, label=labels[1])
+            for f in c.failing:
+                for ax in (a0, a1):
+                    ax.axvspan(f["t_start"], f["t_end"], color="C3", alpha=0.12, lw=0)
+            a1.axhline(3 * c.sigma, color="gray", ls=":", lw=0.8)
+            a1.axhline(-3 * c.sigma, color="gray", ls=":", lw=0.8)
+            a0.set_ylabel(f"{k} [{c.unit}]")
+            a0.set_title(f"{k}: fit {c.fit:.1f} %" + (f" -> {compare_with.channels[k].fit:.1f} %"
+                                                        if compare_with is not None else ""), fontsize=9)
+            a1.set_title("residual (measured - model), 3 sigma dotted", fontsize=9)
+            w = c.whiteness
+            lag_s = w["lags"] * self.dt
+            a2.bar(lag_s[1:], w["r"][1:], width=self.dt, color="C0")
+            a2.axhspan(-w["band"], w["band"], color="gray", alpha=0.2)
+            a2.set_title(f"residual autocorrelation ({w['n_outside']} lags out)", fontsize=9)
+            a2.set_xlabel("lag [s]")
+            s = c.spectrum
+            a3.semilogy(s["f"][1:], s["psd"][1:], color="C0")
+            if compare_with is not None:
+                s2 = compare_with.channels[k].spectrum
+                a3.semilogy(s2["f"][1:], s2["psd"][1:], color="C3", ls="--")
+            a3.axvline(s["dominant_hz"], color="gray", ls=":")
+            a3.set_title(f"residual spectrum, peak {s['dominant_hz']:.2f} Hz", fontsize=9)
+            a3.set_xlabel("frequency [Hz]")
+            for ax in (a0, a1):
+                for ph in self.phases[1:]:
+                    ax.axvline(ph["t_start"], color="gray", lw=0.6, ls="--")
+                ax.grid(True, alpha=0.3)
+            if row == 0:
+                a0.legend(fontsize=8, loc="best")
+        for ax in axes[-1][:2]:
+            ax.set_xlabel("time [s]")
+        fig.suptitle(f"{self.source}: measured vs {self.model} model"
+                     + (f" + {', '.join(self.effects)}" if self.effects else ""), fontsize=10)
+        fig.tight_layout()
+        return fig
+
+
+def _phases(run: ModelRun, t0: float, t_last: float) -> list:
+    """Start-up phases from the model's events (record time)."""
+    marks = [("ramp", t0)]
+    ramp_end = next((e.t for e in run.events if e.kind == "ramp_end"), None)
+    brk = next((e.t for e in run.events if e.kind == "breakaway"), None)
+    if ramp_end is not None:
+        marks.append(("hold, burden stuck" if brk is None or brk > ramp_end else "hold", t0 + float(ramp_end)))
+    if brk is not None:
+        marks.append(("burden slipping", t0 + float(brk)))
+    marks.sort(key=lambda m: m[1])
+    out = []
+    for i, (name, ts) in enumerate(marks):
+        te = marks[i + 1][1] if i + 1 < len(marks) else t_last
+        if te > ts:
+            out.append({"name": name, "t_start": float(ts), "t_end": float(te)})
+    return out
+
+
+def _phase_of(phases, ta, tb) -> str:
+    names = [p["name"] for p in phases if p["t_end"] > ta and p["t_start"] < tb]
+    return " / ".join(dict.fromkeys(names)) or "-"
+
+
+def _describe(t, y, yhat, e, a, b, unit, phases) -> dict:
+    sl = slice(a, b + 1)
+    ym, yh = y[sl], yhat[sl]
+    # the extreme of the measured signal in the interval, and the model's extreme of the same sign
+    km = int(np.argmax(np.abs(ym)))
+    mp = float(ym[km])
+    hp = float(yh.max() if mp >= 0 else yh.min())
+    mean = float(np.mean(e[sl]))
+    ta, tb = float(t[a]), float(t[b])
+    phase = _phase_of(phases, ta, tb)
+    fmt = ".0f" if unit == "A" else ".1f"
+    text = (f"{ta:.1f}-{tb:.1f} s ({phase}): measured peak {mp:{fmt}} {unit}, model {hp:{fmt}} {unit} "
+            f"(model {'low' if mean > 0 else 'high'} by {abs(mean):{fmt}} {unit} on average)")
+    return {"t_start": ta, "t_end": tb, "phase": phase, "measured_peak": mp, "model_peak": hp,
+            "mean_residual": mean, "text": text}
+
+
+def compare_run(measurement: Measurement, run: ModelRun, experiment: Experiment, *, model="macro", effects=(),
+                params: Parameters | None = None, max_lag_s: float = MAX_LAG_S) -> Comparison:
+    """Build a :class:`Comparison` from a model run already sampled at the measured times.
+
+    Parameters
+    ----------
+    measurement : Measurement
+        The record.
+    run : ModelRun
+        Output of :func:`~kilnctl.measure.runner.run_model` on this record.
+    experiment : Experiment
+        The experiment simulated.
+    model : str
+        Model name, for the report.
+    effects : sequence of str
+        Effects added, for the report.
+    params : Parameters, optional
+        Parameters simulated, for the report.
+    max_lag_s : float, default 5.0
+        Largest correlation lag [s].
+
+    Returns
+    -------
+    Comparison
+    """
+    active = measurement.t >= experiment.t0 - 1e-9
+    t = measurement.t[active]
+    dt = float(np.median(np.diff(t)))
+    n = t.size
+    max_lag = int(max(1, min(n // 4, round(max_lag_s / dt))))
+    meas = {k: measurement.channels[k][active] for k in CHANNELS}
+    u = measurement.speed_ref[active] if measurement.speed_ref is not None else run.outputs["speed_ref_rpm"]
+    phases = _phases(run, experiment.t0, float(t[-1]))
+    chans = {}
+    for k, (_name, unit) in CHANNELS.items():
+        y, yhat = meas[k], run.outputs[k]
+        e = y - yhat
+        others = {"speed_ref_rpm (input)": u}
+        others.update({f"{o} (measured)": meas[o] for o in CHANNELS if o != k})
+        xc = {label: crosscorr(e, sig, max_lag) for label, sig in others.items()}
+        fails = [_describe(t, y, yhat, e, a, b, unit, phases) for a, b in failing_intervals(t, e)]
+        chans[k] = ChannelComparison(
+            name=k, unit=unit, measured=y, model=yhat, residual=e, fit=fit_percent(y, yhat),
+            bias=float(np.mean(e)), rms=float(np.sqrt(np.mean(e ** 2))), sigma=robust_sigma(e),
+            whiteness=autocorr(e, max_lag), xcorr=xc, spectrum=residual_spectrum(e, 1.0 / dt), failing=fails)
+    extra = {"kiln_angle": kiln_angle(t, meas["speed_rpm"], (params or Parameters()).n),
+             "model_outputs": run.outputs}
+    return Comparison(t=t, channels=chans, experiment=experiment, model=model, effects=tuple(effects),
+                      params=params, phases=phases, dt=dt, source=measurement.source, extra=extra)
+
+
+def compare(measurement: Measurement, params: Parameters | None = None, model: str = "macro", effects=(), *,
+            t0: float | None = None, max_lag_s: float = MAX_LAG_S) -> Comparison:
+    """Simulate the experiment of a record and compare the model with it.
+
+    Parameters
+    ----------
+    measurement : Measurement
+        The measured start-up.
+    params : Parameters, optional
+        Setup of the experiment (defaults: the paper's Table 1); the gains
+        are fixed once (see :func:`~kilnctl.measure.runner.fixed_gains`).
+    model : {'macro', 'micro'}, default 'macro'
+        Base model.
+    effects : sequence of str
+        Components to add (names of :mod:`kilnctl.model`).
+    t0 : float, optional
+        Start of the start-up in record time [s] (default: from the recorded
+        reference, else the first sample).
+    max_lag_s : float, default 5.0
+        Largest lag of the correlation tests [s].
+
+    Returns
+    -------
+    Comparison
+        Fit % per channel, residual whiteness, cross-correlations with the
+        input and the other channel (99 % bands), residual spectrum, and the
+        failing intervals described in words.
+    """
+    params = fixed_gains(Parameters() if params is None else params)
+    exp = measurement.experiment(params, t0=t0)
+    run = run_model(params, measurement, exp, model=model, effects=effects)
+    return compare_run(measurement, run, exp, model=model, effects=effects, params=params, max_lag_s=max_lag_s)

@@ -1,0 +1,164 @@
+"""Run the model on the experiment of a measured record and sample it at the measured times.
+
+This is the one place where the measurement tools call the simulator, so that
+compare, calibrate and diagnose reproduce an experiment in the same way: the
+gains are resolved once (the plant's controller does not change when a
+parameter is calibrated), the ramp comes from the record when it was logged,
+and the model's outputs are interpolated onto the measured times after the
+duplicate times at mode switches are removed.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import KilnctlError, ModelError
+from ..params import Parameters
+from .io import Experiment, Measurement
+
+__all__ = ["CHANNELS", "ModelRun", "run_model", "fixed_gains", "kiln_angle"]
+
+#: measured column -> model output, unit
+CHANNELS: dict[str, tuple[str, str]] = {"current_A": ("i_a", "A"), "speed_rpm": ("speed_rpm", "rpm")}
+#: default simulation output step per model [s] (the simulator's own defaults)
+_DT = {"macro": 5e-3, "micro": 1e-3}
+
+
+def fixed_gains(params: Parameters) -> Parameters:
+    """Return ``params`` with the PID gains fixed (``gains = 'given'``).
+
+    With ``gains = 'design'`` the gains are designed once, here, from the
+    setup; calibrating a parameter later must not redesign the controller
+    the plant actually ran.
+
+    Parameters
+    ----------
+    params : Parameters
+
+    Returns
+    -------
+    Parameters
+
+    Raises
+    ------
+    KilnctlError
+        When the design is not available; the message asks for the gains.
+    """
+    if params.gains == "given":
+        return params
+    try:
+        from ..simulate import resolve_gains
+
+        return resolve_gains(params)
+    except ImportError as exc:  # design module not installed yet
+        raise ModelError(
+            "the setup says gains = 'design' but the controller design is not available "
+            f"({exc}); state the gains used in the experiment: gains = \"given\", k_p, k_I, k_D") from None
+
+
+@dataclass
+class ModelRun:
+    """Model outputs at the measured times.
+
+    Attributes
+    ----------
+    t : ndarray
+        Measured times that are compared (at or after the start ``t0``) [s].
+    outputs : dict of str to ndarray
+        ``current_A`` [A], ``speed_rpm`` [rpm], ``speed_ref_rpm`` [rpm],
+        ``kiln_angle`` [rad], ``psi`` [rad] at those times.
+    events : list
+        The simulator's mode switches (times relative to ``t0``).
+    response : kilnctl.response.Response
+        The raw simulation.
+    """
+
+    t: np.ndarray
+    outputs: dict
+    events: list
+    response: object
+
+
+def _unique(t, y):
+    """Keep the last value at each duplicated time (the state after a switch)."""
+    rev = t[::-1]
+    _, idx = np.unique(rev, return_index=True)
+    keep = len(t) - 1 - idx
+    return t[keep], y[keep]
+
+
+def kiln_angle(t, speed_rpm, n) -> np.ndarray:
+    """Kiln angle from the motor speed by trapezoidal integration [rad].
+
+    Parameters
+    ----------
+    t : ndarray
+        Times [s].
+    speed_rpm : ndarray
+        Motor speed [rpm].
+    n : float
+        Total reduction motor to kiln [-].
+
+    Returns
+    -------
+    ndarray
+        theta_o(t) - theta_o(t[0]) [rad].
+    """
+    w = np.asarray(speed_rpm) * (2.0 * math.pi / 60.0) / n
+    return np.concatenate([[0.0], np.cumsum(0.5 * (w[1:] + w[:-1]) * np.diff(t))])
+
+
+def run_model(params: Parameters, measurement: Measurement, experiment: Experiment, *, model: str = "macro",
+              effects=(), remove=(), dt: float | None = None, max_events: int = 3000) -> ModelRun:
+    """Simulate the experiment of ``measurement`` and sample the model at its times.
+
+    Parameters
+    ----------
+    params : Parameters
+        Parameters of the model (gains fixed, see :func:`fixed_gains`).
+    measurement : Measurement
+        The record.
+    experiment : Experiment
+        Start time [s], ramp rate [rpm/s] and final reference [rpm].
+    model : {'macro', 'micro'}, default 'macro'
+        Base model.
+    effects : sequence of str
+        Components to add.
+    remove : sequence of str
+        Components to take out.
+    dt : float, optional
+        Simulation output step [s]; the simulator's default for the model.
+    max_events : int, default 3000
+        Mode switches allowed before the run is refused (a runaway fit).
+
+    Returns
+    -------
+    ModelRun
+    """
+    from ..simulate import simulate
+
+    p = params.replace(ramp_rate=experiment.ramp_rate, omega_ref=experiment.omega_ref)
+    active = measurement.t >= experiment.t0 - 1e-9
+    t = measurement.t[active]
+    t_end = float(t[-1] - experiment.t0)
+    if t_end <= 0:
+        raise KilnctlError(f"{measurement.source}: the start-up begins at {experiment.t0:g} s, after the last sample")
+    dt = _DT.get(model, 1e-3) if dt is None else dt
+    resp = simulate(p, model, t_end=t_end, effects=tuple(effects), remove=tuple(remove), dt=min(dt, t_end / 4),
+                    max_events=max_events)
+    ts = np.asarray(resp.t, dtype=float)
+    rel = t - experiment.t0
+    out = {}
+    for col, (name, _unit) in CHANNELS.items():
+        tu, yu = _unique(ts, np.asarray(resp.outputs[name], dtype=float))
+        out[col] = np.interp(rel, tu, yu)
+    for name, key in (("speed_ref_rpm", "speed_ref_rpm"), ("psi", "psi"), ("kiln_rpm", "kiln_rpm")):
+        if key in resp.outputs:
+            tu, yu = _unique(ts, np.asarray(resp.outputs[key], dtype=float))
+            out[name] = np.interp(rel, tu, yu)
+    if not all(np.all(np.isfinite(v)) for v in out.values()):
+        raise KilnctlError("the model produced non-finite outputs")
+    return ModelRun(t=t, outputs=out, events=list(resp.events), response=resp)

@@ -1,0 +1,206 @@
+"""Residual statistics: fit %, whiteness, cross-correlation, spectrum, failing intervals.
+
+Plain functions on arrays, so that each can be tested against a hand
+computation; :mod:`kilnctl.measure.compare` assembles them.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+__all__ = ["fit_percent", "autocorr", "crosscorr", "residual_spectrum", "failing_intervals",
+           "robust_sigma", "Z99"]
+
+#: two-sided 99 % quantile of the standard normal distribution
+Z99 = 2.5758293035489
+
+
+def fit_percent(y, yhat) -> float:
+    """Fit in percent as MATLAB's ``compare`` defines it: 100 (1 - ||y - yhat|| / ||y - mean(y)||).
+
+    Parameters
+    ----------
+    y : array_like
+        Measured signal (any unit).
+    yhat : array_like
+        Model signal (same unit).
+
+    Returns
+    -------
+    float
+        100 for a perfect model, 0 for a model no better than the mean of
+        ``y``, negative for worse; -inf when ``y`` is constant and the model
+        misses it.
+    """
+    y = np.asarray(y, dtype=float)
+    yhat = np.asarray(yhat, dtype=float)
+    den = np.linalg.norm(y - y.mean())
+    num = np.linalg.norm(y - yhat)
+    if den == 0:
+        return 100.0 if num == 0 else -math.inf
+    return float(100.0 * (1.0 - num / den))
+
+
+def _corr_lags(a, b, max_lag):
+    """Normalised cross-correlation r_ab(k) = sum a(t+k) b(t) / (N s_a s_b) for k = -max_lag..max_lag."""
+    a = np.asarray(a, float) - np.mean(a)
+    b = np.asarray(b, float) - np.mean(b)
+    n = a.size
+    den = n * a.std() * b.std()
+    from scipy.signal import correlate
+
+    full = correlate(a, b, mode="full", method="auto")  # index n-1 is lag 0; lag k: sum a[t+k] b[t]
+    mid = n - 1
+    out = full[mid - max_lag: mid + max_lag + 1]
+    return out / den if den > 0 else np.zeros_like(out)
+
+
+def autocorr(e, max_lag: int) -> dict:
+    """Residual autocorrelation with the 99 % band of a white sequence (MATLAB ``resid``).
+
+    Parameters
+    ----------
+    e : array_like
+        Residual, evenly sampled.
+    max_lag : int
+        Largest lag [samples], >= 1.
+
+    Returns
+    -------
+    dict
+        ``lags`` (0..max_lag) [samples], ``r`` (r[0] = 1), ``band``
+        (2.576/sqrt(N)), ``n_outside`` (lags 1..max_lag outside the band) and
+        ``fraction_outside``; about 1 % of the lags of white noise fall outside.
+    """
+    e = np.asarray(e, float)
+    r = _corr_lags(e, e, max_lag)[max_lag:]
+    band = Z99 / math.sqrt(e.size)
+    out = int(np.sum(np.abs(r[1:]) > band))
+    return {"lags": np.arange(max_lag + 1), "r": r, "band": band, "n_outside": out,
+            "fraction_outside": out / max_lag}
+
+
+def crosscorr(e, u, max_lag: int) -> dict:
+    """Cross-correlation of a residual with a signal, with a 99 % band.
+
+    The band is the one MATLAB's ``resid`` uses for correlated signals:
+    2.576 sqrt(P / N) with P = sum_k r_ee(k) r_uu(k) over |k| <= max_lag,
+    which reduces to 2.576/sqrt(N) when either sequence is white.
+
+    Parameters
+    ----------
+    e : array_like
+        Residual.
+    u : array_like
+        Input or other channel, same samples.
+    max_lag : int
+        Largest lag [samples] either way.
+
+    Returns
+    -------
+    dict
+        ``lags`` (-max_lag..max_lag) [samples; positive: e after u], ``r``,
+        ``band``, ``n_outside``, ``fraction_outside``.
+    """
+    e = np.asarray(e, float)
+    u = np.asarray(u, float)
+    r = _corr_lags(e, u, max_lag)
+    ree = _corr_lags(e, e, max_lag)
+    ruu = _corr_lags(u, u, max_lag)
+    P = max(float(np.sum(ree * ruu)), 1.0)
+    band = Z99 * math.sqrt(P / e.size)
+    out = int(np.sum(np.abs(r) > band))
+    return {"lags": np.arange(-max_lag, max_lag + 1), "r": r, "band": band, "n_outside": out,
+            "fraction_outside": out / r.size}
+
+
+def residual_spectrum(e, fs: float, seconds: float = 10.0) -> dict:
+    """Power spectral density of a residual by Welch's method.
+
+    Parameters
+    ----------
+    e : array_like
+        Residual [unit].
+    fs : float
+        Sampling frequency [Hz].
+    seconds : float, default 10.0
+        Segment length [s] (frequency resolution 1/seconds Hz), cut to the
+        record.
+
+    Returns
+    -------
+    dict
+        ``f`` [Hz], ``psd`` [unit^2/Hz], ``dominant_hz`` (largest peak above
+        the lowest two bins), ``peak_ratio`` (that peak over the median PSD:
+        about 1-10 for smooth coloured noise, far more for an oscillation).
+    """
+    from scipy.signal import welch
+
+    e = np.asarray(e, float)
+    nper = int(min(e.size, max(16, 2 ** round(math.log2(max(seconds * fs, 16))))))
+    f, psd = welch(e, fs=fs, nperseg=nper, detrend="constant")
+    lo = 2 if f.size > 4 else 1
+    k = lo + int(np.argmax(psd[lo:]))
+    med = float(np.median(psd[lo:])) if f.size > lo else float(psd[k])
+    return {"f": f, "psd": psd, "dominant_hz": float(f[k]),
+            "peak_ratio": float(psd[k] / med) if med > 0 else math.inf}
+
+
+def robust_sigma(e) -> float:
+    """Scale of a residual from its median absolute value: 1.4826 median(|e|).
+
+    Equal to the standard deviation for zero-mean Gaussian noise, and not
+    inflated by the local failures it is used to find.
+
+    Parameters
+    ----------
+    e : array_like
+
+    Returns
+    -------
+    float
+    """
+    return float(1.4826 * np.median(np.abs(np.asarray(e, float))))
+
+
+def failing_intervals(t, e, *, k_sigma: float = 3.0, merge_s: float | None = None, min_samples: int = 3):
+    """Time intervals where |residual| exceeds ``k_sigma`` robust standard deviations.
+
+    Parameters
+    ----------
+    t : array_like
+        Times [s].
+    e : array_like
+        Residual.
+    k_sigma : float, default 3.0
+        Threshold in units of :func:`robust_sigma`.
+    merge_s : float, optional
+        Exceedances closer than this [s] are one interval (default: the
+        larger of 0.5 s and 1 % of the record).
+    min_samples : int, default 3
+        Intervals with fewer exceeding samples are dropped (isolated noise).
+
+    Returns
+    -------
+    list of (int, int)
+        Index ranges [start, stop] (inclusive) into ``t``.
+    """
+    t = np.asarray(t, float)
+    e = np.asarray(e, float)
+    sig = robust_sigma(e)
+    if sig == 0:
+        sig = float(np.std(e)) or 1.0
+    idx = np.nonzero(np.abs(e) > k_sigma * sig)[0]
+    if idx.size == 0:
+        return []
+    merge = max(0.5, 0.01 * (t[-1] - t[0])) if merge_s is None else merge_s
+    groups = [[idx[0], idx[0], 1]]
+    for k in idx[1:]:
+        if t[k] - t[groups[-1][1]] <= merge:
+            groups[-1][1] = k
+            groups[-1][2] += 1
+        else:
+            groups.append([k, k, 1])
+    return [(int(a), int(b)) for a, b, c in groups if c >= min_samples]
