@@ -1,0 +1,680 @@
+"""Calibration: fit chosen parameters to a measured record by simulation-error least squares.
+
+The model is simulated over the whole experiment for each trial parameter
+set (simulation error, also called output error: the model is never reset to
+the measured state), and ``scipy.optimize.least_squares`` minimises
+
+    sum over channels c of  sum_k ((y_c[k] - yhat_c[k]) / s_c)^2
+
+where ``s_c`` is the measured channel's standard deviation (or a given scale).
+Standard errors come from the Jacobian at the optimum,
+``cov = (J^T J)^-1 s^2`` with ``s^2`` the residual variance, mapped through the
+parameter scaling by the delta method.
+
+Estimator style (after pysindy): configure, ``fit``, then read the fitted
+attributes, which end in ``_``; ``predict`` and ``score`` need a fit first.
+
+>>> cal = Calibration(params, ["mu_c", "mu_s", "m_v"]).fit(record)   # doctest: +SKIP
+>>> print(cal.summary())                                               # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import signal
+import threading
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import KilnctlError, ModelError, NotFittedError
+from ..params import Parameters
+from .effects import FreeParameter, free_parameter
+from .io import Experiment, Measurement
+from .runner import CHANNELS, ModelRun, fixed_gains, run_model
+from .stats import fit_percent
+
+__all__ = ["Calibration", "holdout_masks", "bic", "sweep"]
+
+#: a trial run slower than this many times the median run [-] (and than MIN_LIMIT_S) is cut short
+SLOW_FACTOR = 10.0
+MIN_LIMIT_S = 15.0
+#: mode switches allowed in one trial run (a destabilised loop chatters on its limits)
+MAX_EVENTS = 300
+#: residual value given to a failed trial run, in scaled units
+PENALTY = 30.0
+
+
+class _Timeout(Exception):
+    pass
+
+
+@contextlib.contextmanager
+def _time_limit(seconds):
+    """Raise _Timeout after ``seconds`` of wall time (main thread with SIGALRM only)."""
+    if (seconds is None or not hasattr(signal, "setitimer")
+            or threading.current_thread() is not threading.main_thread()):
+        yield
+        return
+
+    def handler(signum, frame):
+        raise _Timeout()
+
+    old = signal.signal(signal.SIGALRM, handler)
+    signal.setitimer(signal.ITIMER_REAL, seconds)
+    try:
+        yield
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, old)
+
+
+def holdout_masks(measurement: Measurement, kind: str = "blocks", fraction: float = 0.3, n_blocks: int = 15,
+                  t0: float | None = None):
+    """Split the samples of a record into a fitting part and a held-out part.
+
+    Parameters
+    ----------
+    measurement : Measurement
+        The record.
+    kind : {'blocks', 'tail'}, default 'blocks'
+        ``tail``: fit on the first 1 - fraction of the record, hold out the
+        rest.  ``blocks``: cut the record into ``n_blocks`` equal blocks and
+        hold out every k-th one (k = round(1/fraction)), so that every phase
+        of the start-up (ramp, breakaway, steady speed) is in both parts;
+        blocks several seconds long keep coloured noise from leaking across.
+    fraction : float, default 0.3
+        Share of the record held out [-].
+    n_blocks : int, default 15
+        Number of blocks for ``kind='blocks'``.
+    t0 : float, optional
+        Start of the experiment [s]; samples before it belong to neither part.
+
+    Returns
+    -------
+    train, test : ndarray of bool
+        Masks over the samples of ``measurement``.
+    """
+    t = measurement.t
+    start = t[0] if t0 is None else t0
+    active = t >= start - 1e-9
+    span = t[-1] - start
+    rel = (t - start) / span if span > 0 else np.zeros_like(t)
+    if kind == "tail":
+        test = active & (rel > 1.0 - fraction)
+    elif kind == "blocks":
+        block = np.minimum((rel * n_blocks).astype(int), n_blocks - 1)
+        k = max(2, int(round(1.0 / fraction)))
+        test = active & (block % k == k // 2)
+    else:
+        raise ModelError(f"unknown hold-out kind {kind!r}: choose 'blocks' or 'tail'")
+    return active & ~test, test
+
+
+def bic(rss: dict, n: dict, k: int) -> float:
+    """Bayesian information criterion of a multi-channel Gaussian fit.
+
+    BIC = sum_c n_c ln(RSS_c / n_c) + k ln(sum_c n_c): each channel has its
+    own (estimated) noise variance, so the value does not depend on units.
+
+    Parameters
+    ----------
+    rss : dict of str to float
+        Residual sum of squares per channel [unit^2].
+    n : dict of str to int
+        Samples per channel.
+    k : int
+        Number of fitted parameters.
+
+    Returns
+    -------
+    float
+    """
+    total = sum(n.values())
+    val = sum(n[c] * math.log(max(rss[c], 1e-300) / n[c]) for c in rss)
+    return float(val + k * math.log(total))
+
+
+# --- parameter space ----------------------------------------------------------------
+class _Space:
+    """Map between the optimizer's scaled vector u and parameter values."""
+
+    def __init__(self, free: list[FreeParameter], params: Parameters):
+        self.free = list(free)
+        names = [f.name for f in free]
+        self.coords = []  # (label, lo, hi)
+        self.reported = []
+        for f in free:
+            if f.kind == "polar":
+                r = f.upper / f.typical
+                self.coords += [(f"{f.name}*cos({f.partner})", -r, r), (f"{f.name}*sin({f.partner})", -r, r)]
+                self.reported += [f.name, f.partner]
+            elif f.kind == "log":
+                if f.lower <= 0:
+                    raise ModelError(f"log-scaled parameter {f.name!r} needs a lower bound > 0")
+                self.coords.append((f"ln({f.name}/{f.typical:g})", math.log(f.lower / f.typical),
+                                    math.log(f.upper / f.typical)))
+                self.reported.append(f.name)
+            elif f.name == "mu_s" and "mu_c" in names:
+                self.coords.append(("mu_s/mu_c", 1.0, max(1.0 + 1e-6, f.upper / free_parameter("mu_c").lower)))
+                self.reported.append(f.name)
+            else:
+                lo, hi = f.lower, f.upper
+                if f.name == "mu_c" and "mu_s" not in names:
+                    hi = min(hi, params.mu_s)
+                if f.name == "mu_s" and "mu_c" not in names:
+                    lo = max(lo, params.mu_c)
+                self.coords.append((f.name, lo / f.typical, hi / f.typical))
+                self.reported.append(f.name)
+        self.lower = np.array([c[1] for c in self.coords])
+        self.upper = np.array([c[2] for c in self.coords])
+        self._order = sorted(range(len(self.free)), key=lambda i: self.free[i].name == "mu_s")
+
+    def decode(self, u) -> dict:
+        u = np.asarray(u, float)
+        vals = {}
+        pos = self._positions()
+        for i in self._order:
+            f, j = self.free[i], pos[i]
+            if f.kind == "polar":
+                a, b = u[j] * f.typical, u[j + 1] * f.typical
+                vals[f.name] = math.hypot(a, b)
+                vals[f.partner] = math.atan2(b, a)
+            elif f.kind == "log":
+                vals[f.name] = f.typical * math.exp(u[j])
+            elif self.coords[j][0] == "mu_s/mu_c":
+                vals["mu_s"] = vals["mu_c"] * u[j]
+            else:
+                vals[f.name] = u[j] * f.typical
+        return vals
+
+    def encode(self, values: dict) -> np.ndarray:
+        u = []
+        for f in self.free:
+            if f.kind == "polar":
+                amp, ph = values[f.name], values.get(f.partner, 0.0)
+                u += [amp * math.cos(ph) / f.typical, amp * math.sin(ph) / f.typical]
+            elif f.kind == "log":
+                u.append(math.log(max(values[f.name], f.lower) / f.typical))
+            elif f.name == "mu_s" and any(g.name == "mu_c" for g in self.free):
+                u.append(values["mu_s"] / max(values["mu_c"], 1e-9))
+            else:
+                u.append(values[f.name] / f.typical)
+        u = np.array(u, float)
+        span = self.upper - self.lower
+        return np.clip(u, self.lower + 1e-6 * span, self.upper - 1e-6 * span)
+
+    def _positions(self):
+        pos, j = [], 0
+        for f in self.free:
+            pos.append(j)
+            j += 2 if f.kind == "polar" else 1
+        return pos
+
+    def jacobian(self, u) -> np.ndarray:
+        """d(reported values)/du by central differences (no simulation)."""
+        u = np.asarray(u, float)
+        G = np.zeros((len(self.reported), u.size))
+        for j in range(u.size):
+            h = 1e-6 * max(1.0, abs(u[j]))
+            up, um = u.copy(), u.copy()
+            up[j] += h
+            um[j] -= h
+            vp, vm = self.decode(up), self.decode(um)
+            G[:, j] = [(vp[r] - vm[r]) / (2 * h) for r in self.reported]
+        return G
+
+
+# --- the problem: simulate, sample, weight ----------------------------------------------
+class _Problem:
+    """One record, one model structure: residuals of trial parameter values."""
+
+    def __init__(self, measurement, experiment, params, model, effects, scales, mask):
+        self.m = measurement
+        self.exp = experiment
+        self.params = params
+        self.model = model
+        self.effects = tuple(effects)
+        active = measurement.t >= experiment.t0 - 1e-9
+        self.mask = (mask if mask is not None else np.ones(measurement.n, bool))[active]
+        self.meas = {c: measurement.channels[c][active] for c in CHANNELS}
+        self.scales = scales
+        self.walls: list[float] = []
+        self.n_failed = 0
+        self.last_error = None
+
+    def run(self, values: dict) -> ModelRun | None:
+        try:
+            p = self.params.replace(**values)
+        except KilnctlError as exc:
+            self.n_failed += 1
+            self.last_error = str(exc)
+            return None
+        limit = None
+        if len(self.walls) >= 3:
+            limit = max(MIN_LIMIT_S, SLOW_FACTOR * float(np.median(self.walls)))
+        t_start = time.perf_counter()
+        try:
+            with _time_limit(limit):
+                run = run_model(p, self.m, self.exp, model=self.model, effects=self.effects, max_events=MAX_EVENTS)
+        except _Timeout:
+            self.n_failed += 1
+            self.last_error = f"trial run slower than {limit:.0f} s (cut short)"
+            return None
+        except KilnctlError as exc:
+            self.n_failed += 1
+            self.last_error = str(exc)
+            return None
+        self.walls.append(time.perf_counter() - t_start)
+        return run
+
+    def residual(self, run: ModelRun | None, mask=None) -> np.ndarray:
+        mask = self.mask if mask is None else mask
+        parts = []
+        for c in CHANNELS:
+            if run is None:
+                parts.append(np.full(int(mask.sum()), PENALTY))
+            else:
+                parts.append((self.meas[c][mask] - run.outputs[c][mask]) / self.scales[c])
+        return np.concatenate(parts)
+
+    def rss(self, run: ModelRun, mask=None) -> dict:
+        mask = self.mask if mask is None else mask
+        return {c: float(np.sum((self.meas[c][mask] - run.outputs[c][mask]) ** 2)) for c in CHANNELS}
+
+    def fits(self, run: ModelRun, mask=None) -> dict:
+        mask = self.mask if mask is None else mask
+        return {c: fit_percent(self.meas[c][mask], run.outputs[c][mask]) for c in CHANNELS}
+
+
+@dataclass
+class _Trial:
+    values: dict
+    run: ModelRun | None
+    cost: float
+
+
+# --- the estimator -------------------------------------------------------------------------
+class Calibration:
+    """Fit chosen parameters of a model to a measured record.
+
+    Parameters
+    ----------
+    params : Parameters
+        Setup of the experiment and starting values.  The PID gains are fixed
+        once (designed from the setup if ``gains = 'design'``).
+    parameters : sequence of str or FreeParameter, default ('mu_c', 'mu_s', 'm_v')
+        What to fit: names (bounds from :data:`~kilnctl.measure.effects.BASE_PARAMETERS`
+        or the catalogue) or full declarations.
+    model : {'macro', 'micro'}, default 'macro'
+        Model structure.
+    effects : sequence of str
+        Components added to the model.
+    bounds : dict of str to (float, float), optional
+        Bounds that replace the declared ones [unit of each parameter].
+    scales : dict of str to float or 'std', default 'std'
+        Residual scale per channel [A, rpm]; ``'std'``: each measured
+        channel's standard deviation.
+    t0 : float, optional
+        Start of the experiment in record time [s] (default: from the record).
+    max_nfev : int, default 40
+        Largest number of optimizer iterations' function evaluations
+        (each one simulation, plus one per parameter for the Jacobian).
+    diff_step : float, default 1e-3
+        Finite-difference step of the Jacobian, in scaled units [-].
+
+    Attributes
+    ----------
+    values_ : dict of str to float
+        Fitted values [unit of each parameter].
+    stderr_ : dict of str to float
+        Standard errors [same units] (inf when not identifiable).
+    corr_ : ndarray
+        Correlation matrix of the fitted values, in the order of ``names_``.
+    names_ : list of str
+        Names of the fitted values.
+    on_bound_ : list of str
+        Parameters that ended on (or within 0.1 % of) a bound.
+    not_identifiable_ : list of str
+        Parameters with a standard error above half their value (or half
+        their range) or a correlation above 0.99 with another.
+    params_ : Parameters
+        The setup with the fitted values.
+    fit_percent_ : dict of str to float
+        Fit % per channel on the fitted samples.
+    rss_, n_ : dict
+        Residual sum of squares [unit^2] and sample count per channel.
+    bic_ : float
+        :func:`bic` of the fit.
+    cost_ : float
+        Final value of the scaled least-squares cost.
+    nfev_ : int
+        Simulations run by the optimizer (without the Jacobian's).
+    n_failed_ : int
+        Trial runs that failed (counted as a poor fit).
+    run_ : ModelRun
+        The fitted model sampled at the measured times.
+    experiment_ : Experiment
+        The experiment simulated.
+    message_ : str
+        Optimizer status.
+    """
+
+    def __init__(self, params: Parameters | None = None, parameters=("mu_c", "mu_s", "m_v"), *,
+                 model: str = "macro", effects=(), bounds: dict | None = None, scales="std",
+                 t0: float | None = None, max_nfev: int = 40, diff_step: float = 1e-3):
+        self.params = Parameters() if params is None else params
+        self.parameters = tuple(parameters)
+        self.model = model
+        self.effects = tuple(effects)
+        self.bounds = dict(bounds or {})
+        self.scales = scales
+        self.t0 = t0
+        self.max_nfev = max_nfev
+        self.diff_step = diff_step
+
+    # --- helpers --------------------------------------------------------------------
+    def _free(self) -> list[FreeParameter]:
+        out = []
+        for p in self.parameters:
+            fp = p if isinstance(p, FreeParameter) else free_parameter(p, self.params)
+            if fp.name in self.bounds:
+                lo, hi = self.bounds[fp.name]
+                fp = FreeParameter(fp.name, float(lo), float(hi), fp.kind, fp.typical, fp.partner)
+            out.append(fp)
+        return out
+
+    def _check_fitted(self):
+        if not hasattr(self, "values_"):
+            raise NotFittedError("this Calibration is not fitted yet: call fit(measurement) first")
+
+    def _scales(self, measurement, active) -> dict:
+        if isinstance(self.scales, dict):
+            return {c: float(self.scales[c]) for c in CHANNELS}
+        out = {}
+        for c in CHANNELS:
+            s = float(np.std(measurement.channels[c][active]))
+            out[c] = s if s > 0 else 1.0
+        return out
+
+    # --- estimator API --------------------------------------------------------------
+    def fit(self, measurement: Measurement, mask=None, *, init: dict | None = None,
+            starts=None, experiment: Experiment | None = None) -> "Calibration":
+        """Fit the parameters to a record.
+
+        Parameters
+        ----------
+        measurement : Measurement
+            The record.
+        mask : ndarray of bool, optional
+            Samples to fit (e.g. the ``train`` part of :func:`holdout_masks`);
+            default all from the start of the experiment.
+        init : dict, optional
+            Starting values [units of the parameters] (default: the setup's).
+        starts : list of dict, optional
+            Further candidate starting points; the one with the lowest cost
+            (one simulation each) is used.
+        experiment : Experiment, optional
+            The experiment (default: inferred from the record).
+
+        Returns
+        -------
+        Calibration
+            ``self``, fitted.
+        """
+        from scipy.optimize import least_squares
+
+        params = fixed_gains(self.params)
+        exp = experiment or measurement.experiment(params, t0=self.t0)
+        active = measurement.t >= exp.t0 - 1e-9
+        scales = self._scales(measurement, active)
+        free = self._free()
+        space = _Space(free, params)
+        prob = _Problem(measurement, exp, params, self.model, self.effects, scales, mask)
+        start_vals = {r: params[r] for r in space.reported}
+        start_vals.update(init or {})
+        cache: dict[bytes, _Trial] = {}
+
+        def trial(u) -> _Trial:
+            key = np.asarray(u, float).tobytes()
+            if key not in cache:
+                vals = space.decode(u)
+                run = prob.run(vals)
+                r = prob.residual(run)
+                cache[key] = _Trial(vals, run, 0.5 * float(r @ r))
+                if len(cache) > 64:
+                    cache.pop(next(iter(cache)))
+            return cache[key]
+
+        def fun(u):
+            t = trial(u)
+            return prob.residual(t.run)
+
+        candidates = [start_vals] + [dict(start_vals, **s) for s in (starts or [])]
+        u0s = [space.encode(c) for c in candidates]
+        u0 = min(u0s, key=lambda u: trial(u).cost) if len(u0s) > 1 else u0s[0]
+        t_wall = time.perf_counter()
+        if space.coords:
+            res = least_squares(fun, u0, bounds=(space.lower, space.upper), x_scale=1.0, diff_step=self.diff_step,
+                                max_nfev=self.max_nfev, method="trf")
+            u, J, msg, nfev = res.x, res.jac, res.message, int(res.nfev)
+        else:
+            u, J, msg, nfev = np.zeros(0), np.zeros((0, 0)), "nothing to fit", 1
+        best = trial(u)
+        if best.run is None:
+            raise KilnctlError(f"calibration failed: the model cannot be run at the fitted values "
+                               f"({prob.last_error})")
+        self.wall_s_ = time.perf_counter() - t_wall
+        self.names_ = list(space.reported)
+        self.values_ = {k: float(best.values[k]) for k in self.names_}
+        r = prob.residual(best.run)
+        m_res, p = r.size, u.size
+        s2 = float(r @ r) / max(m_res - p, 1)
+        cov_phys, singular = _covariance(J, s2, space.jacobian(u) if p else np.zeros((0, 0)))
+        se = np.sqrt(np.clip(np.diag(cov_phys), 0, None)) if p else np.zeros(0)
+        se = np.where(singular, np.inf, se) if p else se
+        self.stderr_ = {k: float(v) for k, v in zip(self.names_, se)}
+        with np.errstate(invalid="ignore", divide="ignore"):
+            d = np.sqrt(np.diag(cov_phys)) if p else np.zeros(0)
+            corr = cov_phys / np.outer(d, d) if p else np.zeros((0, 0))
+        corr = np.where(np.isfinite(corr), corr, 0.0)
+        if p:
+            np.fill_diagonal(corr, 1.0)
+        self.corr_ = corr
+        span = space.upper - space.lower
+        near = (u - space.lower < 1e-3 * span) | (space.upper - u < 1e-3 * span) if p else np.zeros(0, bool)
+        self.on_bound_ = sorted({self._coord_owner(space, j) for j in np.nonzero(near)[0]})
+        self.not_identifiable_ = self._unidentifiable(free, corr)
+        self.params_ = params.replace(**self.values_)
+        self.fit_percent_ = prob.fits(best.run)
+        self.rss_ = prob.rss(best.run)
+        self.n_ = {c: int(prob.mask.sum()) for c in CHANNELS}
+        self.bic_ = bic(self.rss_, self.n_, p)
+        self.cost_ = best.cost
+        self.nfev_ = nfev
+        self.n_failed_ = prob.n_failed
+        self.run_ = best.run
+        self.experiment_ = exp
+        self.scales_ = scales
+        self.message_ = str(msg)
+        self.measurement_ = measurement
+        self._problem = prob
+        return self
+
+    @staticmethod
+    def _coord_owner(space, j) -> str:
+        pos = space._positions()
+        owner = max(i for i, p in enumerate(pos) if p <= j)
+        return space.free[owner].name
+
+    def _unidentifiable(self, free, corr) -> list[str]:
+        out = set()
+        for i, k in enumerate(self.names_):
+            se, v = self.stderr_[k], self.values_[k]
+            fp = next((f for f in free if f.name == k or f.partner == k), None)
+            if not math.isfinite(se):
+                out.add(k)
+            elif fp is not None and fp.partner == k:  # a phase: meaningless when its amplitude is
+                if se > 1.0:
+                    out.add(k)
+            elif se > 0.5 * abs(v) and (fp is None or se > 0.5 * (fp.upper - fp.lower) or v != 0):
+                out.add(k)
+            for j in range(len(self.names_)):
+                if j != i and abs(corr[i, j]) > 0.99:
+                    out.add(k)
+        return sorted(out)
+
+    def predict(self, measurement: Measurement | None = None) -> dict:
+        """Model outputs of the fitted parameters at the measured times.
+
+        Parameters
+        ----------
+        measurement : Measurement, optional
+            Another record of the same plant (default: the fitted one).
+
+        Returns
+        -------
+        dict of str to ndarray
+            ``current_A`` [A], ``speed_rpm`` [rpm] and further model signals
+            at the record's times from the start of the experiment on.
+        """
+        self._check_fitted()
+        if measurement is None or measurement is self.measurement_:
+            return dict(self.run_.outputs)
+        exp = measurement.experiment(self.params_, t0=self.t0)
+        return dict(run_model(self.params_, measurement, exp, model=self.model, effects=self.effects).outputs)
+
+    def score(self, measurement: Measurement | None = None, mask=None) -> float:
+        """Scaled fit % of the fitted model on a record (both channels together).
+
+        100 (1 - ||e|| / ||y - mean(y)||) over the stacked channels, each
+        divided by its scale: the fit % of the calibration's own objective.
+
+        Parameters
+        ----------
+        measurement : Measurement, optional
+            Record (default: the fitted one).
+        mask : ndarray of bool, optional
+            Samples to score, over the record's samples (default: all from the
+            start of the experiment).
+
+        Returns
+        -------
+        float
+            Percent; 100 is a perfect fit.
+        """
+        self._check_fitted()
+        m = self.measurement_ if measurement is None else measurement
+        exp = self.experiment_ if m is self.measurement_ else m.experiment(self.params_, t0=self.t0)
+        active = m.t >= exp.t0 - 1e-9
+        sel = (np.ones(m.n, bool) if mask is None else np.asarray(mask, bool))[active]
+        out = self.predict(m)
+        e = np.concatenate([(m.channels[c][active][sel] - out[c][sel]) / self.scales_[c] for c in CHANNELS])
+        y = np.concatenate([(m.channels[c][active][sel] - m.channels[c][active][sel].mean()) / self.scales_[c]
+                            for c in CHANNELS])
+        return float(100.0 * (1.0 - np.linalg.norm(e) / np.linalg.norm(y)))
+
+    def summary(self) -> str:
+        """Return a readable table of what was found."""
+        self._check_fitted()
+        lines = [f"calibration of {', '.join(self.names_) or 'nothing'} on the {self.model} model"
+                 + (f" + {', '.join(self.effects)}" if self.effects else "")
+                 + f" ({self.nfev_} runs, {self.wall_s_:.1f} s; {self.message_})"]
+        from ..params import SPECS
+
+        for k in self.names_:
+            unit = SPECS[k].unit if k in SPECS else ""
+            flags = [f for f, on in (("on bound", k in self.on_bound_),
+                                     ("not identifiable", k in self.not_identifiable_)) if on]
+            lines.append(f"  {k:<8} = {self.values_[k]:<12.5g} +- {self.stderr_[k]:<10.3g} {unit:<10} "
+                         + (f"[{', '.join(flags)}]" if flags else ""))
+        lines.append("  fit % " + ", ".join(f"{c} {v:.1f}" for c, v in self.fit_percent_.items()))
+        high = [(self.names_[i], self.names_[j], self.corr_[i, j]) for i in range(len(self.names_))
+                for j in range(i + 1, len(self.names_)) if abs(self.corr_[i, j]) > 0.9]
+        for a, b, c in high:
+            lines.append(f"  correlation {a}-{b} = {c:+.3f}")
+        return "\n".join(lines)
+
+    def to_dict(self) -> dict:
+        """Return the fitted values, standard errors and flags as a JSON-ready dictionary."""
+        self._check_fitted()
+        fin = lambda v: float(v) if math.isfinite(v) else None  # noqa: E731
+        return {"model": self.model, "effects": list(self.effects),
+                "values": dict(self.values_), "stderr": {k: fin(v) for k, v in self.stderr_.items()},
+                "correlation": [[float(x) for x in row] for row in self.corr_],
+                "names": list(self.names_), "on_bound": list(self.on_bound_),
+                "not_identifiable": list(self.not_identifiable_), "fit_percent": dict(self.fit_percent_),
+                "bic": self.bic_, "n_runs": self.nfev_, "n_failed_runs": self.n_failed_, "message": self.message_}
+
+
+def _covariance(J, s2, G):
+    """Covariance of the reported values: G (J^T J)^-1 G^T s2, with singular directions flagged."""
+    p = J.shape[1] if J.ndim == 2 else 0
+    if p == 0:
+        return np.zeros((0, 0)), np.zeros(0, bool)
+    JTJ = J.T @ J
+    w, V = np.linalg.eigh(JTJ)
+    tol = max(w.max(), 1e-300) * 1e-10
+    bad = w <= tol
+    inv = (V[:, ~bad] / w[~bad]) @ V[:, ~bad].T
+    cov_u = inv * s2
+    cov = G @ cov_u @ G.T
+    # a reported value that loads on a singular direction is not identifiable
+    singular = (np.abs(G @ V[:, bad]).sum(axis=1) > 1e-9 * (np.abs(G).sum(axis=1) + 1e-300)
+                if bad.any() else np.zeros(G.shape[0], bool))
+    return cov, singular
+
+
+def sweep(measurement: Measurement, params: Parameters, grid: dict, *, model: str = "macro", effects=(),
+          t0: float | None = None) -> list[dict]:
+    """Fit % of the model over a grid of parameter values (the paper's parametric study, Fig. 4).
+
+    Parameters
+    ----------
+    measurement : Measurement
+        The record.
+    params : Parameters
+        Setup.
+    grid : dict of str to sequence
+        Values per parameter; every combination is run (e.g.
+        ``{"mu_c": [0.3, 0.4], "mu_s": [0.45, 0.51]}``).  Combinations the
+        parameter rules refuse (mu_c > mu_s) are skipped.
+    model : str, default 'macro'
+        Model.
+    effects : sequence of str
+        Components added.
+    t0 : float, optional
+        Start of the experiment [s].
+
+    Returns
+    -------
+    list of dict
+        One row per combination: the values, ``fit_current_A`` and
+        ``fit_speed_rpm`` [%], ``final_current_A`` [A] (model, mean of the
+        last 5 s), or ``error``.
+    """
+    import itertools
+
+    params = fixed_gains(params)
+    exp = measurement.experiment(params, t0=t0)
+    keys = list(grid)
+    rows = []
+    for combo in itertools.product(*(grid[k] for k in keys)):
+        vals = dict(zip(keys, (float(v) for v in combo)))
+        row = dict(vals)
+        try:
+            p = params.replace(**vals)
+            run = run_model(p, measurement, exp, model=model, effects=effects)
+        except KilnctlError as exc:
+            row["error"] = str(exc)
+            rows.append(row)
+            continue
+        active = measurement.t >= exp.t0 - 1e-9
+        for c in CHANNELS:
+            row[f"fit_{c}"] = fit_percent(measurement.channels[c][active], run.outputs[c])
+        tt = run.t
+        row["final_current_A"] = float(np.mean(run.outputs["current_A"][tt >= tt[-1] - 5.0]))
+        rows.append(row)
+    return rows

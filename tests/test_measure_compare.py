@@ -1,0 +1,184 @@
+"""Residual statistics, compare and calibrate, each checked against an independent truth."""
+
+import argparse
+import json
+import math
+
+import numpy as np
+import pytest
+
+from kilnctl import Parameters
+from kilnctl.errors import NotFittedError
+from kilnctl.measure import Measurement
+from kilnctl.measure.calibrate import Calibration, _covariance, bic, holdout_masks
+from kilnctl.measure.compare import compare
+from kilnctl.measure.stats import autocorr, crosscorr, failing_intervals, fit_percent, residual_spectrum
+from kilnctl.simulate import simulate
+
+GIVEN = Parameters(gains="given", k_p=2.0, k_I=5.0, k_D=0.01)
+T_END = 24.0
+FS = 50.0
+
+
+def _sampled(resp, t):
+    tt, idx = np.unique(resp.t, return_index=True)
+    return {k: np.interp(t, tt, np.asarray(resp.outputs[k])[idx]) for k in ("i_a", "speed_rpm", "speed_ref_rpm")}
+
+
+def _record(params, effects=(), noise=(5.0, 0.3), seed=0):
+    t = np.arange(0, T_END, 1 / FS)
+    y = _sampled(simulate(params, "macro", t_end=T_END, effects=effects), t)
+    rng = np.random.default_rng(seed)
+    return Measurement.from_arrays(t, y["i_a"] + noise[0] * rng.standard_normal(t.size),
+                                   y["speed_rpm"] + noise[1] * rng.standard_normal(t.size), y["speed_ref_rpm"])
+
+
+# --- statistics -------------------------------------------------------------------
+def test_fit_percent_by_hand():
+    # hand: ||y - yhat|| = 1, ||y - mean y|| = sqrt(2.25 + 0.25 + 0.25 + 2.25) = sqrt(5)
+    assert fit_percent([1, 2, 3, 4], [1, 2, 3, 5]) == pytest.approx(100 * (1 - 1 / math.sqrt(5)))
+    assert fit_percent([1, 2, 3], [1, 2, 3]) == 100.0
+    assert fit_percent([1, 2, 3], [2, 2, 2]) == pytest.approx(0.0)  # the mean scores 0
+
+
+def test_whiteness_of_true_white_noise_and_of_coloured_noise():
+    rng = np.random.default_rng(1)
+    e = rng.standard_normal(20000)
+    w = autocorr(e, 100)
+    # truth: white noise leaves about 1 % of lags outside the 99 % band (binomial: P(>6 of 100) < 0.1 %)
+    assert w["band"] == pytest.approx(2.5758 / math.sqrt(20000), rel=1e-4)
+    assert w["n_outside"] <= 6
+    ar = np.zeros_like(e)
+    for k in range(1, e.size):
+        ar[k] = 0.9 * ar[k - 1] + e[k]
+    wa = autocorr(ar, 100)
+    # truth: AR(1) autocorrelation 0.9^k: lags up to ~log(0.02)/log(0.9) = 37 are far outside
+    assert wa["n_outside"] > 30 and wa["r"][1] == pytest.approx(0.9, abs=0.02)
+
+
+def test_crosscorr_independent_and_delayed():
+    rng = np.random.default_rng(2)
+    u = rng.standard_normal(5000)
+    e = rng.standard_normal(5000)
+    assert crosscorr(e, u, 50)["n_outside"] <= 4
+    d = np.roll(u, 7)  # e lags u by 7 samples: peak at lag +7
+    c = crosscorr(d, u, 20)
+    assert c["lags"][int(np.argmax(c["r"]))] == 7
+
+
+def test_spectrum_finds_the_burden_frequency():
+    # truth: a 0.34 Hz sine (the paper's burden pendulum, eq. 25) in white noise
+    t = np.arange(0, 60, 0.02)
+    rng = np.random.default_rng(3)
+    s = residual_spectrum(10 * np.sin(2 * np.pi * 0.34 * t) + rng.standard_normal(t.size), 50.0, seconds=20)
+    assert s["dominant_hz"] == pytest.approx(0.34, abs=0.05) and s["peak_ratio"] > 100
+
+
+def test_failing_interval_found_where_the_bump_is():
+    t = np.arange(0, 20, 0.02)
+    rng = np.random.default_rng(4)
+    e = rng.standard_normal(t.size)
+    e[(t >= 2) & (t < 4)] += 30.0
+    iv = failing_intervals(t, e)
+    assert len(iv) == 1
+    a, b = iv[0]
+    assert t[a] == pytest.approx(2.0, abs=0.05) and t[b] == pytest.approx(3.98, abs=0.05)
+
+
+def test_bic_by_hand():
+    # hand: 100 ln(4/100) + 50 ln(1/50) + 2 ln(150)
+    v = bic({"a": 4.0, "b": 1.0}, {"a": 100, "b": 50}, 2)
+    assert v == pytest.approx(100 * math.log(0.04) + 50 * math.log(0.02) + 2 * math.log(150))
+
+
+def test_covariance_of_a_linear_fit():
+    # truth: ordinary least squares, cov = s^2 (X^T X)^-1
+    rng = np.random.default_rng(5)
+    X = rng.standard_normal((200, 3))
+    cov, singular = _covariance(X, 0.25, np.eye(3))
+    assert np.allclose(cov, 0.25 * np.linalg.inv(X.T @ X)) and not singular.any()
+    X[:, 2] = X[:, 1]  # two identical columns: not identifiable
+    _, singular = _covariance(X, 0.25, np.eye(3))
+    assert singular[1] and singular[2] and not singular[0]
+
+
+def test_holdout_blocks_cover_every_phase():
+    t = np.arange(0, 30, 0.02)
+    m = Measurement.from_arrays(t, 100 + t, np.minimum(74 * t, 500))
+    train, test = holdout_masks(m, "blocks", 0.3)
+    assert not (train & test).any() and (train | test).all()
+    assert 0.25 < test.mean() < 0.4 and test[t < 7].any()  # part of the ramp is held out
+    train, test = holdout_masks(m, "tail", 0.3)
+    assert t[test].min() == pytest.approx(21.0, abs=0.05)
+
+
+# --- compare ----------------------------------------------------------------------
+def test_compare_fit_matches_a_hand_computation_and_finds_the_ramp_failure():
+    m = _record(GIVEN, effects=("second_motor",))
+    c = compare(m, GIVEN)
+    # independent: the base model sampled by hand, fit % computed by hand
+    y = _sampled(simulate(GIVEN, "macro", t_end=T_END), m.t)
+    hand = 100 * (1 - np.linalg.norm(m.current - y["i_a"]) / np.linalg.norm(m.current - m.current.mean()))
+    assert c.fit["current_A"] == pytest.approx(hand, abs=0.05)
+    # truth: J_m2 = 21.5 kg m^2 at 74 rpm/s = 7.75 rad/s^2 needs 167 N m = 36 A more during the ramp (0-6.76 s)
+    fails = [f for f in c.failing if f["channel"] == "current_A"]
+    assert fails and fails[0]["t_start"] < 0.5 and 6.0 < fails[0]["t_end"] < 7.5
+    assert fails[0]["mean_residual"] == pytest.approx(36.2, abs=6)
+    assert "model low" in fails[0]["text"] and "ramp" in fails[0]["text"]
+    json.dumps(c.to_dict(), allow_nan=False)
+
+
+def test_compare_of_the_true_model_leaves_white_residuals():
+    m = _record(GIVEN, noise=(5.0, 0.3), seed=7)
+    c = compare(m, GIVEN)
+    for ch in c.channels.values():
+        # truth: the residual is the white noise added, so ~1 % of lags fall outside the 99 % band
+        assert ch.whiteness["fraction_outside"] < 0.05
+        assert not ch.failing
+
+
+def test_compare_cli_json(tmp_path, capsys):
+    from kilnctl.cli import compare_cmd
+
+    m = _record(GIVEN, effects=("second_motor",))
+    data = tmp_path / "rec.csv"
+    m.to_csv(data)
+    cfg = tmp_path / "setup.toml"
+    cfg.write_text('[controller]\ngains = "given"\nk_p = 2.0\nk_I = 5.0\nk_D = 0.01\n')
+    ap = argparse.ArgumentParser()
+    compare_cmd.register(ap.add_subparsers())
+    args = ap.parse_args(["compare", "--data", str(data), "--config", str(cfg), "--effects", "second_motor",
+                          "--json", "--report", str(tmp_path / "rep")])
+    assert args.func(args) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["effects"] == ["second_motor"] and d["fit_percent"]["current_A"] > 95
+    html = (tmp_path / "rep" / "compare.html").read_text()
+    assert "data:image/png;base64," in html
+
+
+# --- calibrate ---------------------------------------------------------------------
+def test_calibration_recovers_the_generating_parameters():
+    truth = GIVEN.replace(mu_c=0.37, m_v=620e3)
+    m = _record(truth, seed=11)
+    cal = Calibration(GIVEN, ["mu_c", "m_v"]).fit(m)
+    # truth: the values used to generate the record
+    assert cal.values_["mu_c"] == pytest.approx(0.37, rel=0.01)
+    assert cal.values_["m_v"] == pytest.approx(620e3, rel=0.01)
+    for k, v in (("mu_c", 0.37), ("m_v", 620e3)):
+        assert abs(cal.values_[k] - v) < 5 * cal.stderr_[k]
+    assert cal.fit_percent_["current_A"] > 97 and not cal.on_bound_
+    assert cal.score() > 95
+
+
+def test_mu_s_is_not_identifiable_under_the_papers_law():
+    # truth (NOTES): with the printed law, breakaway at tan(psi) = mu_s is followed at once by the held
+    # (Filippov) mode until the kinetic angle tan(psi) = mu_c R / L, so mu_s below mu_c R/L = 0.64 leaves
+    # no trace in the current
+    m = _record(GIVEN.replace(mu_s=0.55), seed=12)
+    cal = Calibration(GIVEN, ["mu_c", "mu_s"]).fit(m)
+    assert "mu_s" in cal.not_identifiable_
+
+
+def test_unfitted_calibration_refuses_to_predict():
+    with pytest.raises(NotFittedError, match="fit"):
+        Calibration(GIVEN).predict()
