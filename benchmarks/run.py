@@ -1,0 +1,370 @@
+"""kilnctl speed and accuracy against what a user would otherwise write (``make bench``).
+
+Cases
+-----
+macro  40 s start-up, rigid reducer, burden stick-slip (friction_law='torque': four slip cycles)
+micro  60 s start-up, coupling, pinion, mesh with backlash (gap_0 = 1) and stick-slip
+sweep  200 micro start-ups over burden mass m_v x backlash delta_x
+
+For each case, in one run on this machine: the median wall time of kilnctl
+over repeats (structures already built; build time reported apart), the ratio
+of each baseline's time to it (baseline (a): scipy solve_ivp hybrid; (b):
+python-control nlsys, smooth), and the accuracy of every implementation
+against a tight-tolerance reference (kilnctl at rtol 1e-10, itself checked
+against baseline (a) at rtol 1e-10) on peak current, final current, peak
+stress and event times.  Writes ``benchmarks/results.json`` whole.
+
+Usage: ``python -m benchmarks.run [--quick] [--out PATH]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import platform
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from .baselines import ControlSmooth, ScipyHybrid, summarize, summary_errors
+
+HERE = Path(__file__).resolve().parent
+#: tight reference tolerances
+REF = {"rtol": 1e-10, "atol": 1e-12, "event_tol": 1e-12}
+#: the fastest solve_ivp method per model, measured (docs/benchmarks.md): LSODA for the stiff mesh
+#: of the micro model, DOP853 for the macro model (not stiff; LSODA 2.7x and BDF 5x slower there)
+SCIPY_METHOD = {"macro": "DOP853", "micro": "LSODA"}
+#: python-control: LSODA was the fastest of LSODA / BDF / Radau on the smoothed (stiff) system
+CONTROL_METHOD = "LSODA"
+HORIZON = {"macro": 40.0, "micro": 60.0}
+
+
+# ----------------------------------------------------------------------------------------------
+def base_params():
+    """Parameters of every case: the torque friction law (stick-slip cycles), designed gains.
+
+    Falls back to fixed gains (k_p = 2, k_I = 5, k_D = 0.01) when the root-locus design
+    is not available in this checkout.
+    """
+    from kilnctl import Parameters
+    from kilnctl.simulate import resolve_gains
+
+    p = Parameters(friction_law="torque")
+    try:
+        return resolve_gains(p), "designed (kilnctl.design.gains_for)"
+    except ImportError:
+        return p.replace(gains="given", k_p=2.0, k_I=5.0, k_D=0.01), "given k_p=2, k_I=5, k_D=0.01 (no design module)"
+
+
+def kilnctl_version() -> str:
+    try:
+        head = subprocess.run(["git", "-C", str(HERE.parent), "rev-parse", "--short", "HEAD"], capture_output=True,
+                              text=True, timeout=10).stdout.strip()
+        dirty = subprocess.run(["git", "-C", str(HERE.parent), "status", "--porcelain", "--", "kilnctl"],
+                               capture_output=True, text=True, timeout=10).stdout.strip()
+        return head + (" + uncommitted kilnctl/ changes" if dirty else "")
+    except (OSError, subprocess.SubprocessError):
+        return "unknown"
+
+
+def timed(fn, repeats: int):
+    """Call fn() `repeats` times; return (list of wall times [s], last result)."""
+    times, out = [], None
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        out = fn()
+        times.append(time.perf_counter() - t0)
+    return times, out
+
+
+def ksummary(r):
+    return summarize(r.t, r.outputs, r.events)
+
+
+def rel_errors(s, ref, horizon=None):
+    """Relative errors of summary ``s`` against ``ref`` (see :func:`summary_errors`)."""
+    return summary_errors(s, ref)
+
+
+def fmt_err(e):
+    if e is None:
+        return "-"
+    return "inf (event lists differ)" if e == math.inf else f"{e:.1e}"
+
+
+def fmt_s(s):
+    return f"{s * 1e3:.1f} ms" if s < 1 else f"{s:.2f} s"
+
+
+# ----------------------------------------------------------------------------------------------
+def single_case(model, P, quick, log):
+    """macro or micro: kilnctl, references, baselines (a) and (b)."""
+    from kilnctl.simulate import simulate
+
+    T = HORIZON[model] if not quick else HORIZON[model] / 4
+    reps = (11 if model == "macro" else 7) if not quick else 3
+    res = {"t_end_s": T}
+    # build (first call) apart from the timed runs
+    t0 = time.perf_counter()
+    r = simulate(P, model=model, t_end=T)
+    res["first_call_s"] = time.perf_counter() - t0
+    res["build_s"] = r.info.get("build_s")
+    times, r = timed(lambda: simulate(P, model=model, t_end=T), reps)
+    res["median_s"] = statistics.median(times)
+    res["min_s"] = min(times)
+    res["repeats"] = reps
+    res["internal_wall_s"] = r.info.get("wall_s")
+    s_k = ksummary(r)
+    res["n_events"] = len(r.events)
+    log(f"  kilnctl {model}: median {fmt_s(res['median_s'])} over {reps} (min {fmt_s(res['min_s'])}), "
+        f"first call {fmt_s(res['first_call_s'])}, {len(r.events)} events")
+    # tight references: kilnctl and baseline (a), each at rtol 1e-10; they check each other
+    t0 = time.perf_counter()
+    ref = simulate(P, model=model, t_end=T, **REF)
+    res["reference_s"] = time.perf_counter() - t0
+    s_ref = ksummary(ref)
+    sc_ref = ScipyHybrid(P, model).simulate(T, rtol=REF["rtol"], atol=REF["atol"], method="LSODA")
+    s_scref = summarize(sc_ref.t, sc_ref.outputs, sc_ref.events)
+    res["scipy_reference_s"] = sc_ref.wall_s
+    res["reference_vs_scipy_reference"] = rel_errors(s_ref, s_scref, T)
+    res["errors"] = rel_errors(s_k, s_ref, T)
+    res["max_rel_err"] = res["errors"]["max"]
+    cross = res["reference_vs_scipy_reference"]
+    log(f"  kilnctl vs its reference (rtol 1e-10): max rel err {fmt_err(res['max_rel_err'])}; reference vs scipy "
+        f"LSODA at rtol 1e-10: " + ", ".join(f"{k} {fmt_err(v)}" for k, v in cross.items() if k != "max"))
+    # baseline (a), against its own rtol 1e-10 run
+    meth = SCIPY_METHOD[model]
+    sc_reps = 3 if not quick else 1
+    st, b = timed(lambda: ScipyHybrid(P, model).simulate(T, method=meth), sc_reps)
+    res["scipy"] = {"method": meth, "median_s": statistics.median(st), "repeats": sc_reps,
+                    "errors": rel_errors(summarize(b.t, b.outputs, b.events), s_scref, T), "n_rhs": b.info["n_rhs"]}
+    res["ratio_scipy"] = res["scipy"]["median_s"] / res["median_s"]
+    log(f"  scipy solve_ivp ({meth}) {model}: median {fmt_s(res['scipy']['median_s'])} over {sc_reps}, "
+        f"ratio {res['ratio_scipy']:.1f}, max rel err {fmt_err(res['scipy']['errors']['max'])}")
+    # baseline (b): a smooth model, so its error is its smoothing: against the hybrid reference of (a)
+    ct_reps = (3 if model == "macro" else 1) if not quick else 1
+    cs = ControlSmooth(P, model)
+    cs.system()
+    ct_t, cb = timed(lambda: cs.simulate(T, method=CONTROL_METHOD), ct_reps)
+    e_c = rel_errors(summarize(cb.t, cb.outputs), {**s_scref, "event_times": None}, T)
+    res["control"] = {"method": CONTROL_METHOD, "median_s": statistics.median(ct_t), "repeats": ct_reps,
+                      "errors": e_c, "horizon_s": T, "note": "smooth model: no events; error = smoothing"}
+    res["ratio_control"] = res["control"]["median_s"] / res["median_s"]
+    log(f"  python-control nlsys ({CONTROL_METHOD}) {model}: median {fmt_s(res['control']['median_s'])} over "
+        f"{ct_reps}, ratio {res['ratio_control']:.1f}, max rel err {fmt_err(e_c['max'])} (smoothing)")
+    return res
+
+
+def sweep_grid(quick):
+    n_m, n_x = (20, 10) if not quick else (4, 2)
+    m_v = np.linspace(0.6, 1.5, n_m) * 580e3
+    dx = np.linspace(0.0, 16e-3, n_x)
+    return [(float(a), float(b)) for a in m_v for b in dx]
+
+
+def sweep_case(P, quick, log):
+    """200 micro start-ups; baselines on a subset, extrapolated (stated in the output)."""
+    from kilnctl.simulate import simulate
+
+    T = HORIZON["micro"] if not quick else 15.0
+    grid = sweep_grid(quick)
+    res = {"n_runs": len(grid), "t_end_s": T, "grid": "m_v in 0.6..1.5 x 580 t (20) x delta_x in 0..16 mm (10)"}
+    failures = []
+    simulate(P, model="micro", t_end=1.0)  # structure built
+    t0 = time.perf_counter()
+    summaries = {}
+    for i, (m_v, dx) in enumerate(grid):
+        try:
+            r = simulate(P.replace(m_v=m_v, delta_x=dx), model="micro", t_end=T)
+            summaries[i] = ksummary(r)
+        except Exception as exc:  # noqa: BLE001 - a failed run is counted and reported, not fatal
+            failures.append({"m_v": m_v, "delta_x": dx, "error": f"{type(exc).__name__}: {exc}"[:200]})
+    res["median_s"] = time.perf_counter() - t0  # one pass: the sweep's total wall time
+    res["per_run_s"] = res["median_s"] / len(grid)
+    res["failures"] = failures
+    log(f"  kilnctl sweep: {len(grid)} micro runs in {fmt_s(res['median_s'])} "
+        f"({fmt_s(res['per_run_s'])} per run), {len(failures)} failed")
+    # subset: corners and centre of the grid
+    n = len(grid)
+    subset = sorted({0, n // 4, n // 2, (3 * n) // 4, n - 1} if not quick else {0, n - 1})
+    subset = [i for i in subset if i in summaries]
+    errs, cross, sc_times, sc_errs = [], [], [], []
+    for i in subset:
+        m_v, dx = grid[i]
+        Pi = P.replace(m_v=m_v, delta_x=dx)
+        s_ref = ksummary(simulate(Pi, model="micro", t_end=T, **REF))
+        errs.append(rel_errors(summaries[i], s_ref, T)["max"])
+        scr = ScipyHybrid(Pi, "micro").simulate(T, rtol=REF["rtol"], atol=REF["atol"], method="LSODA")
+        s_scref = summarize(scr.t, scr.outputs, scr.events)
+        cross.append(rel_errors(s_ref, s_scref, T)["max"])
+        b = ScipyHybrid(Pi, "micro").simulate(T, method=SCIPY_METHOD["micro"])
+        sc_times.append(b.wall_s)
+        sc_errs.append(rel_errors(summarize(b.t, b.outputs, b.events), s_scref, T)["max"])
+    res["reference_vs_scipy_reference_max"] = max(cross) if cross else None
+    res["accuracy_subset"] = [grid[i] for i in subset]
+    res["max_rel_err"] = max(errs) if errs else None
+    res["scipy"] = {"method": SCIPY_METHOD["micro"], "subset_runs": len(subset), "subset_mean_s": float(np.mean(sc_times)),
+                    "extrapolated_s": float(np.mean(sc_times)) * len(grid), "max_rel_err": max(sc_errs) if sc_errs else None,
+                    "note": f"timed on {len(subset)} of {len(grid)} grid points, mean x {len(grid)}"}
+    res["ratio_scipy"] = res["scipy"]["extrapolated_s"] / res["median_s"]
+    log(f"  scipy sweep: {len(subset)} runs timed, mean {fmt_s(res['scipy']['subset_mean_s'])} -> "
+        f"extrapolated {fmt_s(res['scipy']['extrapolated_s'])} for {len(grid)}; ratio {res['ratio_scipy']:.1f}")
+    # python-control: two grid points
+    ct_sub = [subset[0], subset[-1]] if not quick else [subset[0]]
+    ct_times = []
+    for i in ct_sub:
+        m_v, dx = grid[i]
+        ct_times.append(ControlSmooth(P.replace(m_v=m_v, delta_x=dx), "micro").simulate(T, method=CONTROL_METHOD).wall_s)
+    res["control"] = {"method": CONTROL_METHOD, "subset_runs": len(ct_sub), "subset_mean_s": float(np.mean(ct_times)),
+                      "extrapolated_s": float(np.mean(ct_times)) * len(grid),
+                      "note": f"timed on {len(ct_sub)} of {len(grid)} grid points, mean x {len(grid)}"}
+    res["ratio_control"] = res["control"]["extrapolated_s"] / res["median_s"]
+    log(f"  python-control sweep: {len(ct_sub)} runs timed, mean {fmt_s(res['control']['subset_mean_s'])} -> "
+        f"extrapolated {fmt_s(res['control']['extrapolated_s'])}; ratio {res['ratio_control']:.1f}")
+    return res
+
+
+# ----------------------------------------------------------------------------------------------
+RSS_CHILD = r"""
+import json, resource, sys, time, tracemalloc
+sys.path.insert(0, sys.argv[1])
+from benchmarks.run import base_params
+from kilnctl.simulate import simulate
+P, _ = base_params()
+simulate(P, model="micro", t_end=0.5, dt=1e-3)   # imports and build, outside the measurement
+base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+tracemalloc.start()
+r = simulate(P, model="micro", t_end=60.0, dt=1e-3)
+cur, peak = tracemalloc.get_traced_memory()
+tracemalloc.stop()
+after = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+n = len(r.t)
+nbytes = r.t.nbytes + sum(v.nbytes for v in r.outputs.values()) + sum(v.nbytes for v in r.states.values())
+print(json.dumps({"rss_before_kB": base, "rss_peak_kB": after, "run_rss_increase_kB": after - base,
+                  "tracemalloc_peak_kB": peak / 1024, "response_kB": nbytes / 1024, "samples": n}))
+"""
+
+
+def rss_case(log):
+    out = subprocess.run([sys.executable, "-c", RSS_CHILD, str(HERE.parent)], capture_output=True, text=True,
+                         timeout=600)
+    if out.returncode != 0:
+        log("  memory measurement failed: " + out.stderr.strip().splitlines()[-1])
+        return {"error": out.stderr.strip()[-500:]}
+    m = json.loads(out.stdout.strip().splitlines()[-1])
+    log(f"  memory, 60 s micro at 1 kHz output ({m['samples']} samples): peak RSS {m['rss_peak_kB'] / 1024:.0f} MB "
+        f"(process after imports and build {m['rss_before_kB'] / 1024:.0f} MB, increase during the run "
+        f"{m['run_rss_increase_kB'] / 1024:.1f} MB); Python allocations peak {m['tracemalloc_peak_kB'] / 1024:.1f} MB, "
+        f"Response arrays {m['response_kB'] / 1024:.1f} MB")
+    return m
+
+
+# ----------------------------------------------------------------------------------------------
+def table(results):
+    rows = [("case", "kilnctl median", "scipy (a)", "ratio (a)", "control (b)", "ratio (b)", "err kilnctl",
+             "err (a)", "err (b)")]
+    for case in ("macro", "micro", "sweep"):
+        r = results["cases"].get(case)
+        if r is None:
+            continue
+        sc, ct = r["scipy"], r["control"]
+        sc_t = sc.get("median_s", sc.get("extrapolated_s"))
+        ct_t = ct.get("median_s", ct.get("extrapolated_s"))
+        star = "*" if case == "sweep" else ""
+        rows.append((case, fmt_s(r["median_s"]), fmt_s(sc_t) + star, f"{r['ratio_scipy']:.1f}", fmt_s(ct_t) + star,
+                     f"{r['ratio_control']:.1f}", fmt_err(r["max_rel_err"]),
+                     fmt_err(sc["errors"]["max"] if "errors" in sc else sc.get("max_rel_err")),
+                     fmt_err(ct["errors"]["max"] if "errors" in ct else None)))
+    w = [max(len(str(row[i])) for row in rows) for i in range(len(rows[0]))]
+    lines = ["  ".join(str(c).rjust(w[i]) if i else str(c).ljust(w[i]) for i, c in enumerate(row)) for row in rows]
+    lines.insert(1, "  ".join("-" * x for x in w))
+    return "\n".join(lines)
+
+
+def write_json(path: Path, data) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".tmp-", suffix=".json")
+    try:
+        with os.fdopen(fd, "w") as fh:
+            json.dump(data, fh, indent=2, default=float)
+            fh.write("\n")
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--quick", action="store_true", help="short horizons and few repeats (a smoke run; "
+                    "does not write results.json unless --out is given)")
+    ap.add_argument("--out", type=Path, default=None, help="results file (default benchmarks/results.json)")
+    ap.add_argument("--cases", default="macro,micro,sweep,memory", help="comma-separated subset")
+    args = ap.parse_args(argv)
+    out = args.out or (None if args.quick else HERE / "results.json")
+
+    def log(msg):
+        print(msg, flush=True)
+
+    import casadi
+    import control
+    import scipy
+
+    P, gains_note = base_params()
+    t_start = time.perf_counter()
+    results = {
+        "machine": {"python": platform.python_version(), "cpus": os.cpu_count(), "platform": platform.platform(),
+                    "load_average_start": os.getloadavg()},
+        "versions": {"kilnctl": kilnctl_version(), "casadi": casadi.__version__, "scipy": scipy.__version__,
+                     "numpy": np.__version__, "control": control.__version__},
+        "gains": gains_note, "k_p": P.k_p, "k_I": P.k_I, "k_D": P.k_D, "friction_law": P.friction_law,
+        "reference": REF,
+        "errors_note": ("max relative error on peak current, final current (mean over the last 5 s), peak stress "
+                        "and event times (relative to each event's time, floored at 1 s): kilnctl against kilnctl "
+                        "at rtol 1e-10; baseline (a) against (a) at rtol 1e-10; (b) against (a) at rtol 1e-10 "
+                        "(its smoothing error). reference_vs_scipy_reference cross-checks the two references."), "quick": args.quick, "cases": {},
+    }
+    cases = args.cases.split(",")
+    log(f"kilnctl benchmarks ({'quick' if args.quick else 'full'}); kilnctl {results['versions']['kilnctl']}; "
+        f"gains {gains_note}; load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} CPUs")
+    for model in ("macro", "micro"):
+        if model in cases:
+            log(f"[{model}]")
+            results["cases"][model] = single_case(model, P, args.quick, log)
+    if "sweep" in cases:
+        log("[sweep]")
+        results["cases"]["sweep"] = sweep_case(P, args.quick, log)
+    if "memory" in cases:
+        log("[memory]")
+        results["memory"] = rss_case(log)
+    results["machine"]["load_average_end"] = os.getloadavg()
+    results["total_bench_s"] = time.perf_counter() - t_start
+    log("")
+    log(table(results))
+    log("  ratios: baseline time / kilnctl time, measured in this run.  err: max relative error on peak current, "
+        "final current, peak stress, event times against a tight (rtol 1e-10) run of the same implementation; "
+        "(b) against the hybrid reference of (a), i.e. its smoothing error, without event times.")
+    for case, r in results["cases"].items():
+        c = r.get("reference_vs_scipy_reference")
+        if c:
+            log(f"  cross-check {case}: kilnctl reference vs scipy reference: "
+                + ", ".join(f"{k} {fmt_err(v)}" for k, v in c.items() if k != "max"))
+    if "sweep" in results["cases"]:
+        log("  * sweep baselines timed on a subset of the grid and extrapolated (mean per run x 200).")
+    log(f"  bench wall time {results['total_bench_s']:.0f} s")
+    if out is not None:
+        write_json(out, results)
+        log(f"wrote {out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
