@@ -1,0 +1,44 @@
+"""``kilnctl verify``: the designed gains on the nonlinear plant, beside the linear prediction."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from ..errors import ConfigFileError
+from . import print_json
+from .common import add_config_arg, load_params
+
+
+def register(sub) -> None:
+    """Add the ``verify`` subcommand.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+    """
+    p = sub.add_parser("verify", help="run the designed gains on the nonlinear plant and compare with the design")
+    add_config_arg(p)
+    p.add_argument("--model", choices=("macro", "micro"), default="macro", help="nonlinear model (default macro)")
+    p.add_argument("--t-end", type=float, default=40.0, metavar="S", help="simulated time [s] (default 40)")
+    p.add_argument("--plot", metavar="FILE", help="write the comparison figure (format from the extension)")
+    p.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    """Verify and print; return the exit code."""
+    from ..design.plots import save_figure
+    from ..verify import verify
+
+    if args.plot and args.config and Path(args.plot).resolve() == Path(args.config).resolve():
+        raise ConfigFileError(f"--plot {args.plot} is the --config file: refusing to overwrite it")
+    v = verify(load_params(args), model=args.model, t_end=args.t_end)
+    if args.plot:
+        save_figure(v.plot(), args.plot)
+    if args.json:
+        print_json(v.to_dict())
+    else:
+        g = v.params
+        print(f"gains: k_p = {g.k_p:.4g} V/rpm, k_I = {g.k_I:.4g} V/(rpm*s), k_D = {g.k_D:.4g} V*s/rpm")
+        print(v)
+    return 0
