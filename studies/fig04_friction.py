@@ -133,7 +133,8 @@ def main(out: Path = OUT) -> PaperTable:
             f"eq. 25 sqrt(C1/J_v) = {math.sqrt(base.m_v * base.g * base.L / base.J_v) / (2 * math.pi):.3f} Hz")
     tab.add("final current mu1..mu4, printed law", "not printed (mu3 fits best)",
             ", ".join(f"{m['paper', mu]['final']:.0f}" for mu in MU_C) + " A", "not in paper",
-            "rises with mu_c as m_v g L sin(atan(mu_c R/L)); mu_s only sets when the burden lets go")
+            "rises with mu_c as m_v g L sin(atan(mu_c R/L)). mu_s plays no part here: with the printed law the "
+            "breakaway at tan psi = mu_s < mu_c R/L only enters 'held', and sliding starts at tan psi = mu_c R/L")
     rt, mt = runs["torque", 0.40], m["torque", 0.40]
     brk = [e.t for e in rt.events if e.kind == "breakaway"]
     tl = list(rt.t)

@@ -121,7 +121,7 @@ def main(out: Path = OUT) -> PaperTable:
             f"a Coulomb pendulum with the friction on arm R and gravity on arm L loses about 2 mu_c R/L = "
             f"{math.degrees(2 * MU_C * base.R / base.L):.0f} deg of amplitude per half swing (small-angle), and a "
             f"half swing takes pi/sqrt(C1/J_v) = {math.pi / w:.2f} s (eq. 25): from 90 deg it stops after "
-            f"{tp[2]}. About 10 s needs mu_c near {mu_10} with Table 1; even with equal arms (R = L) mu_c = 0.35 "
+            f"{tp[2]} half swings. About 10 s needs mu_c near {mu_10} with Table 1; even with equal arms (R = L) mu_c = 0.35 "
             f"stops it after {equal_arms[2]} half swings ({equal_arms[0]:.2f} s)")
     tab.add("comes to rest at an offset", "yes, offset from the zero mark",
             f"{tp[1]:.1f} deg", "agrees", "qualitatively; the paper's figure (and its offset) is not in the text")
