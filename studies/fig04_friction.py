@@ -30,20 +30,58 @@ I_PAPER, I_MEASURED = 620.0, 650.0  # A, paper Fig. 4 and Fig. 5
 
 
 def sliding_current(p: Parameters) -> float:
-    """Motor current [A] with the burden sliding at tan(psi*) = mu_c*R/L at the set speed (hand calculation)."""
+    """Motor current with the burden sliding at tan(psi*) = mu_c*R/L at the set speed (hand calculation).
+
+    Parameters
+    ----------
+    p : Parameters
+        Kiln, burden and motor parameters.
+
+    Returns
+    -------
+    float
+        Armature current [A]: kiln torque (burden plus bearing, eq. 17) over n*k_i, plus the
+        motor's viscous loss B_m*omega_m/k_i.
+    """
     psi = math.atan(p.mu_c * p.R / p.L)
     torque_kiln = p.m_v * p.g * p.L * math.sin(psi) + p.T_brg
     return torque_kiln / (p.n * p.k_i) + p.B_m * (p.omega_ref / p.K_fb) / p.k_i
 
 
 def mu_c_for_current(p: Parameters, current: float) -> float:
-    """Kinetic coefficient mu_c [-] whose sliding equilibrium draws ``current`` [A] (inverse of sliding_current)."""
+    """Kinetic coefficient whose sliding equilibrium draws a given current (inverse of sliding_current).
+
+    Parameters
+    ----------
+    p : Parameters
+        Kiln, burden and motor parameters (mu_c is ignored).
+    current : float
+        Steady armature current [A].
+
+    Returns
+    -------
+    float
+        mu_c [-].
+    """
     torque_kiln = (current - p.B_m * (p.omega_ref / p.K_fb) / p.k_i) * p.n * p.k_i - p.T_brg
     return math.tan(math.asin(torque_kiln / (p.m_v * p.g * p.L))) * p.L / p.R
 
 
 def measure(r) -> dict:
-    """Final current, its settling time and oscillation of one run."""
+    """Final current, its settling time and oscillation of one run.
+
+    Parameters
+    ----------
+    r : Response
+        A macro-model run.
+
+    Returns
+    -------
+    dict
+        ``final`` and ``mean20`` (means of the last 5 and 20 s) [A], ``settle`` (within 5 % of
+        final) [s] or None, ``ptp`` [A] and ``freq`` [Hz] of the last 15 s, final burden ``mode``,
+        ``peak`` current [A].
+    """
     i = r["i_a"]
     final = r.window_mean("i_a", 5.0)
     ptp, f = oscillation(r.t, i, T_END - 15.0)

@@ -32,15 +32,36 @@ MU_SCAN = (0.03, 0.04, 0.05, 0.06, 0.075, 0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4)
 
 
 def swing(p: Parameters):
-    """Release the burden from rest at p.psi_0 with the kiln clamped; return the response."""
+    """Release the burden from rest at p.psi_0 with the kiln clamped.
+
+    Parameters
+    ----------
+    p : Parameters
+        Burden parameters and release angle ``psi_0`` [rad].
+
+    Returns
+    -------
+    Response
+        T_END seconds of the swing.
+    """
     return simulate(p, components=PENDULUM, t_end=T_END, dt=2e-3)
 
 
 def at_rest(r) -> tuple[float, float, int]:
-    """Time of the last mode switch [s], final angle [deg] and number of half swings of one run.
+    """Time to come to rest, final angle and number of half swings of one run.
 
     A half swing is a slip interval longer than 1 ms (the printed law may let
     go and re-stick within a nanosecond at a turning point).
+
+    Parameters
+    ----------
+    r : Response
+        A pendulum run.
+
+    Returns
+    -------
+    tuple of (float, float, int)
+        Time of the last mode switch [s], final angle [deg], half swings [-].
     """
     t_last = r.events[-1].t if r.events else 0.0
     halves, t_go = 0, None

@@ -29,10 +29,21 @@ I_PAPER, I_MEASURED, I_FIG5 = 280.0, 450.0, 420.0  # A: Fig. 10 (one motor), tex
 
 
 def phases(r) -> dict:
-    """Peak currents [A] of a start-up, split into backlash engagement and acceleration.
+    """Peak currents of a start-up, split into backlash engagement and acceleration.
 
     The acceleration lasts until the motor speed first reaches 98 % of the set
     point; the engagement transient until 0.5 s after the last mesh event.
+
+    Parameters
+    ----------
+    r : Response
+        A micro-model start-up.
+
+    Returns
+    -------
+    dict
+        ``t_acc``, ``t_eng`` [s]; ``peak_all`` (whole acceleration) and ``peak_acc`` (after the
+        engagement) [A] with their times ``t_all``, ``t_peak_acc`` [s]; ``n_mesh`` mesh events.
     """
     p = r.params
     t, i = r.t, r["i_a"]

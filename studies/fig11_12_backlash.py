@@ -30,7 +30,24 @@ DX_FIG12 = 10  # mm, Fig. 12
 
 
 def startup(p: Parameters, t_ramp: float):
-    """Micro-model start-up to 1 s past the end of the ramp; return (response, measures)."""
+    """Micro-model start-up to 1 s past the end of the ramp.
+
+    Parameters
+    ----------
+    p : Parameters
+        Parameters with the backlash ``delta_x`` [m] and initial gap ``gap_0`` [-].
+    t_ramp : float
+        End of the speed ramp [s].
+
+    Returns
+    -------
+    Response
+        The run.
+    dict
+        ``peak`` stress during the ramp [Pa] and its time ``t_peak`` [s], stress ``at_ramp_end``
+        [Pa], mesh events ``n_mesh`` and separations ``n_sep``, first contact time ``t_contact``
+        [s] and closing speed ``v_impact`` [m/s], time of the last mesh event ``last_mesh`` [s].
+    """
     r = simulate(p, "micro", t_end=t_ramp + 1.0)
     sig_peak, t_peak = window_peak(r.t, r["sigma"], 0.0, t_ramp)
     k_end = int(np.argmin(np.abs(r.t - t_ramp)))

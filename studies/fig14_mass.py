@@ -29,7 +29,19 @@ PAPER_RATIO = 2.2  # paper, Fig. 14: +100 % mass -> +120 % stress
 
 
 def steady(r) -> dict:
-    """Mean [Pa] and largest [Pa] stress of the last 5 s, final burden mode, peak current [A]."""
+    """Steady-state measures of one run.
+
+    Parameters
+    ----------
+    r : Response
+        A micro-model run.
+
+    Returns
+    -------
+    dict
+        ``mean`` and ``max`` stress of the last 5 s [Pa], final burden ``mode``, ``i_peak``
+        current [A], ``limited``: whether the current limit was reached.
+    """
     m = r.t >= r.t[-1] - 5.0
     return {"mean": r.window_mean("sigma", 5.0), "max": float(np.max(r["sigma"][m])),
             "mode": str(r.burden_mode[-1]), "i_peak": float(np.max(r["i_a"])),
