@@ -1,0 +1,302 @@
+"""Running a study: executors (local processes, in-process, Dask), the point cache, progress.
+
+The engine checks every point's parameters first, looks each point up in the
+cache, and sends only the missing ones to the executor.  Every finished point
+is written to the cache as it arrives (one small JSON file, written whole or
+not at all), so an interrupted sweep resumes where it stopped.  The result
+table lists the points in the space's order, whatever order they finished in,
+so the same study gives the same table on any executor.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import sys
+import time
+from concurrent.futures import Future, ProcessPoolExecutor
+from concurrent.futures import as_completed as _local_as_completed
+from pathlib import Path
+
+from ..errors import KilnctlError, ParameterError
+from ..response import write_atomic
+from ..simulate import simulate
+
+__all__ = ["run_sweep", "run_point", "PointCache", "EXECUTORS"]
+
+#: executor names accepted besides ``dask://HOST:PORT`` and a ``distributed.Client``
+EXECUTORS = ("local", "serial")
+
+
+def run_point(task: dict) -> dict:
+    """Simulate one point of a study and return its record (runs in a worker).
+
+    Parameters
+    ----------
+    task : dict
+        From :meth:`Study.task`.
+
+    Returns
+    -------
+    dict
+        ``key``; ``status`` ``'ok'`` or ``'failed'``; ``error`` (the
+        :class:`~kilnctl.errors.KilnctlError` message of a failed point, else
+        ``''``); ``summary`` (:meth:`Response.summary`, JSON-ready); ``custom``
+        (values of the study's own output functions).
+
+    Notes
+    -----
+    A point that fails with a :class:`~kilnctl.errors.KilnctlError` (an
+    unstable loop, an event storm, gains that cannot be designed) is a result,
+    recorded with its message; any other exception is a bug and stops the
+    sweep.
+    """
+    from ..params import Parameters
+
+    rec = {"key": task["key"], "status": "ok", "error": "", "summary": {}, "custom": {}}
+    try:
+        resp = simulate(Parameters(task["params"]), task["model"], t_end=task["t_end"],
+                        effects=task["effects"], remove=task["remove"], **task["options"])
+        rec["summary"] = resp.summary()
+        rec["custom"] = {k: float(f(resp)) for k, f in task["custom"].items()}
+    except KilnctlError as exc:
+        rec.update(status="failed", error=f"{type(exc).__name__}: {exc}")
+    return rec
+
+
+class PointCache:
+    """Finished points on disk: one JSON file per point, named by its key.
+
+    The key hashes the full parameter set, model, horizon, components,
+    simulation options and the kilnctl sources that decide the result (see
+    :func:`kilnctl.sweep.study.code_fingerprint`); any study reaching the same
+    point reuses it.
+
+    Parameters
+    ----------
+    directory : path-like
+        Folder of the cache (created when the first point is stored).
+    """
+
+    def __init__(self, directory):
+        self.directory = Path(directory)
+        if self.directory.exists() and not self.directory.is_dir():
+            raise ParameterError(f"cache {self.directory} is a file, not a folder")
+
+    def path(self, key: str) -> Path:
+        """Return the file of a point: ``<directory>/<key[:2]>/<key>.json``."""
+        return self.directory / key[:2] / f"{key}.json"
+
+    def get(self, key: str) -> dict | None:
+        """Return the stored record of a point, or None (also for an unreadable file)."""
+        try:
+            rec = json.loads(self.path(key).read_text())
+        except (OSError, ValueError):
+            return None
+        return rec if isinstance(rec, dict) and rec.get("key") == key else None
+
+    def put(self, record: dict) -> Path:
+        """Store a point's record, whole or not at all; return its file."""
+        return write_atomic(self.path(record["key"]), json.dumps(record))
+
+
+# --- executors ----------------------------------------------------------------------------------
+def _init_worker() -> None:
+    """Worker start: leave Ctrl-C to the parent, which shuts the pool down cleanly."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+class _Lazy(Future):
+    """A future run in this process when its result is first asked for (the 'serial' executor)."""
+
+    def __init__(self, fn, arg):
+        super().__init__()
+        self._call = (fn, arg)
+
+    def result(self, timeout=None):
+        if not self.done():
+            fn, arg = self._call
+            try:
+                self.set_result(fn(arg))
+            except BaseException as exc:
+                self.set_exception(exc)
+        return super().result(timeout)
+
+
+class _Serial:
+    label = "serial"
+
+    def submit(self, task):
+        return _Lazy(run_point, task)
+
+    def as_completed(self, futures):
+        return iter(futures)
+
+    def close(self, futures, cancel: bool):
+        pass
+
+
+class _Local:
+    def __init__(self, workers: int):
+        import multiprocessing
+
+        self.label = f"local ({workers} process{'es' if workers > 1 else ''})"
+        # spawn: clean workers (no inherited threads or locks); each builds its plants once and is reused
+        self.pool = ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
+                                        initializer=_init_worker)
+
+    def submit(self, task):
+        return self.pool.submit(run_point, task)
+
+    def as_completed(self, futures):
+        return _local_as_completed(futures)
+
+    def close(self, futures, cancel: bool):
+        self.pool.shutdown(wait=True, cancel_futures=cancel)
+
+
+class _Dask:
+    def __init__(self, executor):
+        try:
+            import distributed
+        except ImportError:
+            raise KilnctlError("a Dask executor needs the 'distributed' package: pip install 'kilnctl[sweep]'") \
+                from None
+        self._as_completed = distributed.as_completed
+        if isinstance(executor, str):
+            address = "tcp://" + executor.split("://", 1)[1]
+            try:
+                self.client = distributed.Client(address, timeout=10)
+            except OSError as exc:
+                raise KilnctlError(f"cannot reach the Dask scheduler at {address}: {exc}") from None
+            self.own = True
+        else:
+            self.client, self.own = executor, False
+        self.label = f"dask ({self.client.scheduler.address})"
+
+    def submit(self, task):
+        return self.client.submit(run_point, task, key=f"kilnctl-sweep-{task['key']}")
+
+    def as_completed(self, futures):
+        return self._as_completed(list(futures))
+
+    def close(self, futures, cancel: bool):
+        if cancel and futures:
+            self.client.cancel(list(futures))
+        if self.own:
+            self.client.close()
+
+
+def _backend(executor, workers, n_tasks):
+    if executor is None or executor == "local":
+        if workers is None:
+            workers = os.cpu_count() or 1
+        if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+            raise ParameterError(f"workers = {workers!r} must be an integer >= 1")
+        return _Local(min(workers, max(n_tasks, 1)))
+    if workers is not None:
+        raise ParameterError("workers= applies to the local executor only; a Dask cluster has its own workers")
+    if executor == "serial":
+        return _Serial()
+    if isinstance(executor, str):
+        if executor.startswith(("dask://", "tcp://")):
+            return _Dask(executor)
+        raise ParameterError(f"executor = {executor!r}: use 'local', 'serial', 'dask://HOST:PORT' "
+                             "or a dask.distributed.Client")
+    if hasattr(executor, "submit") and hasattr(executor, "scheduler"):
+        return _Dask(executor)
+    raise ParameterError(f"executor {executor!r} is not 'local', 'serial', 'dask://HOST:PORT' or a "
+                         "dask.distributed.Client")
+
+
+def _progress(total: int, name: str, enabled: bool, cached: int):
+    from tqdm.auto import tqdm
+
+    return tqdm(total=total, desc=name, unit="run", disable=not enabled, file=sys.stderr, dynamic_ncols=True,
+                postfix={"cached": cached} if cached else None)
+
+
+def run_sweep(study, executor=None, *, workers: int | None = None, cache=None, progress: bool = True):
+    """Run every point of a study in parallel and return the labelled result table.
+
+    Parameters
+    ----------
+    study : Study
+        What to simulate.
+    executor : str or dask.distributed.Client, optional
+        ``'local'`` (default): a pool of ``workers`` long-lived processes on
+        this machine; ``'serial'``: one after the other in this process;
+        ``'dask://HOST:PORT'``: the Dask scheduler at that address; or a
+        ``dask.distributed.Client`` (kept open).  Every executor gives the same
+        table.
+    workers : int, optional
+        Processes of the local executor (default: the number of cores).
+    cache : path-like, optional
+        Folder of finished points.  Points found there are not run again, and
+        each point is stored as soon as it finishes, so an interrupted sweep
+        resumes.  None: no cache.
+    progress : bool, default True
+        Show a progress bar (on standard error).
+
+    Returns
+    -------
+    SweepResult
+        One row per point, in the space's order.
+
+    Raises
+    ------
+    ParameterError
+        Impossible points (before anything runs) or a bad executor.
+    KeyboardInterrupt
+        Passed on after the pool is shut down; the finished points stay cached.
+    """
+    from .result import SweepResult
+
+    t0 = time.perf_counter()
+    params = study.parameter_sets()
+    tasks = [study.task(p) for p in params]
+    store = PointCache(cache) if cache is not None else None
+    records: dict[str, dict] = {}
+    from_cache: set[str] = set()
+    if store is not None:
+        for t in tasks:
+            if t["key"] not in records:
+                rec = store.get(t["key"])
+                if rec is not None and all(k in rec["custom"] for k in study.custom_outputs):
+                    records[t["key"]] = rec
+                    from_cache.add(t["key"])
+    todo = list({t["key"]: t for t in tasks if t["key"] not in records}.values())
+    label = "none (all points cached)"
+    if todo:
+        backend = _backend(executor, workers, len(todo))
+        label = backend.label
+        futures = {}
+        try:
+            with _progress(len(todo), study.name, progress, len(from_cache)) as bar:
+                futures = {backend.submit(t): t["key"] for t in todo}
+                for fut in backend.as_completed(futures):
+                    rec = fut.result()
+                    records[futures[fut]] = rec
+                    if store is not None:
+                        store.put(rec)
+                    bar.update()
+        except BaseException:
+            backend.close(futures, cancel=True)
+            if store is not None and progress:
+                print(f"{study.name}: stopped; {len(records)} of {len(tasks)} points are in the cache "
+                      f"{store.directory}: run again to resume", file=sys.stderr)
+            raise
+        backend.close(futures, cancel=False)
+    info = {
+        "n_points": len(tasks),
+        "n_computed": len(todo),
+        "n_cached": len(from_cache),
+        "n_failed": sum(records[t["key"]]["status"] != "ok" for t in tasks),
+        "wall_s": time.perf_counter() - t0,
+        "executor": label,
+        "cache": None if store is None else str(store.directory),
+    }
+    cached = [t["key"] in from_cache for t in tasks]
+    return SweepResult.from_records(study, [records[t["key"]] for t in tasks], cached, info)
+

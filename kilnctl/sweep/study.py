@@ -1,0 +1,311 @@
+"""A parametric study: a parameter space, the simulation to run at each point, its outputs.
+
+Examples
+--------
+>>> from kilnctl.sweep import Study, Grid
+>>> st = Study(Grid({"m_v": [290e3, 580e3]}), outputs=["final_current_A"], model="macro", t_end=40.0)
+>>> [p.m_v for p in st.parameter_sets()]
+[290000.0, 580000.0]
+>>> Study(Grid({"m_vv": [1.0]}))
+Traceback (most recent call last):
+...
+kilnctl.errors.ParameterError: unknown sweep variable 'm_vv': did you mean 'm_v' or ...?...
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+from functools import lru_cache
+from pathlib import Path
+from typing import Callable, Mapping, Sequence
+
+import numpy as np
+
+from ..errors import ParameterError, close_matches_hint
+from ..params import SPECS, Parameters
+from .space import Space
+
+__all__ = ["Study", "OUTPUTS", "SIM_OPTIONS"]
+
+#: outputs a study may ask for: keys of :meth:`kilnctl.response.Response.summary`, with unit and meaning
+OUTPUTS: dict[str, tuple[str, str]] = {
+    "peak_current_A": ("A", "largest absolute armature current of the run"),
+    "final_current_A": ("A", "time-weighted mean armature current over the last 5 s"),
+    "settle_time_s": ("s", "time after which the motor speed stays within 2 % of the set point (NaN: never)"),
+    "peak_stress_Pa": ("Pa", "largest absolute bending stress of a girth-gear tooth (Lewis)"),
+    "final_stress_Pa": ("Pa", "time-weighted mean tooth bending stress over the last 5 s"),
+    "n_events": ("-", "number of mode switches (breakaway, contact, limits ...)"),
+    "burden_mode_final": ("-", "burden mode at the end: stick, slip_pos, slip_neg or held"),
+    "wall_time_s": ("s", "simulation wall time of the point (not reproducible; for benchmarks)"),
+}
+
+#: keyword options of :func:`kilnctl.simulate.simulate` a study may set for every point
+SIM_OPTIONS = ("dt", "rtol", "atol", "event_tol", "max_events", "n_grid", "method", "max_step")
+
+#: source files whose content decides a simulation's result; their hash is part of every cache key
+_CODE_PARTS = ("params.py", "simulate.py", "response.py", "linear.py", "model", "design")
+
+
+@lru_cache(maxsize=1)
+def code_fingerprint() -> str:
+    """Return a hash of the kilnctl sources that decide simulation results.
+
+    A cached sweep point is reused only while this hash is unchanged, so a
+    changed model never serves stale results.
+
+    Returns
+    -------
+    str
+        16 hex digits.
+    """
+    root = Path(__file__).resolve().parents[1]
+    h = hashlib.sha256()
+    for part in _CODE_PARTS:
+        p = root / part
+        files = sorted(p.rglob("*")) if p.is_dir() else [p]
+        for f in files:
+            if f.suffix in (".py", ".c") and f.is_file():
+                h.update(str(f.relative_to(root)).encode())
+                h.update(f.read_bytes())
+    return h.hexdigest()[:16]
+
+
+class Study:
+    """A parametric study of kiln start-ups.
+
+    Parameters
+    ----------
+    space : Grid, LatinHypercube or MonteCarlo
+        The points to simulate.  Each variable is a parameter name (value in
+        the parameter's unit) or a factor of ``factors``.
+    outputs : sequence of str or mapping of str to callable, default ('peak_stress_Pa',)
+        Keys of :data:`OUTPUTS` (summary values of each run), or a mapping from
+        a column name to a function ``f(response) -> float`` (module-level, so
+        worker processes can import it) for anything else.
+    model : {'macro', 'micro'}, default 'micro'
+        Plant of the paper to simulate at each point.
+    t_end : float, default 40.0
+        Simulated time of each start-up [s].
+    base : Parameters, optional
+        Parameters the space varies (default: the paper's Table 1).
+    effects, remove : sequence of str
+        Components to add to or take out of the model (as in
+        :func:`kilnctl.simulate.simulate`).
+    factors : mapping of str to sequence of str, optional
+        Factor variables: ``{"friction": ("mu_c", "mu_s")}`` makes the variable
+        ``friction`` [-] multiply the base values of both coefficients, so they
+        vary together (and ``mu_c <= mu_s`` keeps holding).
+    options : mapping, optional
+        Simulation options for every point, from :data:`SIM_OPTIONS`
+        (``dt`` [s], ``rtol``, ``atol`` ...).
+    name : str, default 'sweep'
+        Name shown in the progress bar and in the result.
+
+    Raises
+    ------
+    ParameterError
+        An unknown variable, output or option (with close matches), a factor
+        on a non-numeric parameter, or a non-positive ``t_end``.
+    ModelError
+        An unknown model or component.
+    """
+
+    def __init__(self, space: Space, outputs: Sequence[str] | Mapping[str, Callable] = ("peak_stress_Pa",), *,
+                 model: str = "micro", t_end: float = 40.0, base: Parameters | None = None,
+                 effects: Sequence[str] = (), remove: Sequence[str] = (),
+                 factors: Mapping[str, Sequence[str]] | None = None, options: Mapping | None = None,
+                 name: str = "sweep"):
+        from ..model import component_names
+
+        if not isinstance(space, Space):
+            raise ParameterError(f"space must be a Grid, LatinHypercube or MonteCarlo, not {type(space).__name__}")
+        self.space = space
+        self.base = Parameters() if base is None else base
+        if not isinstance(self.base, Parameters):
+            raise ParameterError(f"base must be a kilnctl.Parameters, not {type(self.base).__name__}")
+        self.model = model
+        self.effects = tuple(effects)
+        self.remove = tuple(remove)
+        component_names(model, self.effects, self.remove)  # checks model and component names
+        if isinstance(t_end, bool) or not isinstance(t_end, (int, float)) or not math.isfinite(t_end) or t_end <= 0:
+            raise ParameterError(f"t_end = {t_end!r} must be a finite number of seconds > 0")
+        self.t_end = float(t_end)
+        self.name = str(name)
+        self.factors = {k: tuple(v) for k, v in (factors or {}).items()}
+        self._check_factors()
+        self._check_variables()
+        self.outputs, self.custom_outputs = self._check_outputs(outputs)
+        self.options = dict(options or {})
+        for k in self.options:
+            if k not in SIM_OPTIONS:
+                raise ParameterError(f"unknown simulation option {k!r}: {close_matches_hint(k, SIM_OPTIONS)}")
+
+    # --- validation -------------------------------------------------------------------------
+    def _check_factors(self):
+        for fname, targets in self.factors.items():
+            if fname in SPECS:
+                raise ParameterError(f"factor {fname!r} has the name of a parameter: choose another name")
+            if not targets:
+                raise ParameterError(f"factor {fname!r} names no parameter to multiply")
+            for t in targets:
+                if t not in SPECS:
+                    raise ParameterError(f"factor {fname!r}: unknown parameter {t!r}: {close_matches_hint(t, SPECS)}")
+                if SPECS[t].is_option:
+                    raise ParameterError(f"factor {fname!r}: parameter {t!r} is an option, not a number")
+
+    def _check_variables(self):
+        known = list(SPECS) + list(self.factors)
+        for nm in self.space.names:
+            if nm not in known:
+                raise ParameterError(f"unknown sweep variable {nm!r}: {close_matches_hint(nm, known)} "
+                                     "(a variable is a parameter name or a factor declared in factors=)")
+        unused = set(self.factors) - set(self.space.names)
+        if unused:
+            raise ParameterError(f"factor(s) {sorted(unused)} declared but not in the space")
+
+    @staticmethod
+    def _check_outputs(outputs):
+        if isinstance(outputs, str):
+            outputs = [outputs]
+        if isinstance(outputs, Mapping):
+            custom = dict(outputs)
+            for k, f in custom.items():
+                if not callable(f):
+                    raise ParameterError(f"output {k!r}: {f!r} is not a function of the response")
+            return tuple(custom), custom
+        outputs = tuple(outputs)
+        if not outputs:
+            raise ParameterError("a study needs at least one output; choose from " + ", ".join(OUTPUTS))
+        for k in outputs:
+            if k not in OUTPUTS:
+                raise ParameterError(f"unknown output {k!r}: {close_matches_hint(k, OUTPUTS)}")
+        if len(set(outputs)) != len(outputs):
+            raise ParameterError(f"outputs repeat a name: {list(outputs)}")
+        return outputs, {}
+
+    # --- points -----------------------------------------------------------------------------
+    @property
+    def variables(self) -> tuple[str, ...]:
+        """Names of the swept variables, in the space's order."""
+        return self.space.names
+
+    def __len__(self) -> int:
+        return len(self.space)
+
+    def samples(self) -> dict[str, np.ndarray]:
+        """Return the values of every variable at every point (see :meth:`Space.samples`)."""
+        return self.space.samples()
+
+    def params_at(self, values: Mapping[str, float | str]) -> Parameters:
+        """Return the parameter set of one point.
+
+        Parameters
+        ----------
+        values : mapping
+            Value of each variable (parameter values in their unit, factors [-]).
+
+        Returns
+        -------
+        Parameters
+            ``base`` with the point's values; a factor multiplies the base value
+            of each parameter it names (two factors on one parameter multiply).
+        """
+        changes: dict[str, float | str] = {}
+        for nm, v in values.items():
+            if nm in self.factors:
+                for t in self.factors[nm]:
+                    changes[t] = changes.get(t, self.base[t]) * float(v)
+            else:
+                changes[nm] = v.item() if isinstance(v, np.generic) else v
+        return self.base.replace(**changes)
+
+    def parameter_sets(self) -> list[Parameters]:
+        """Return the parameter set of every point, checked before any simulation runs.
+
+        Returns
+        -------
+        list of Parameters
+
+        Raises
+        ------
+        ParameterError
+            When some points are impossible parameter sets: says how many, and
+            shows the first with its reason.
+        """
+        cols = self.samples()
+        out, bad = [], []
+        for i in range(len(self)):
+            point = {nm: cols[nm][i] for nm in self.variables}
+            try:
+                out.append(self.params_at(point))
+            except ParameterError as exc:
+                bad.append((i, point, exc))
+        if bad:
+            i, point, exc = bad[0]
+            shown = {k: (float(v) if not isinstance(v, str) else v) for k, v in point.items()}
+            raise ParameterError(
+                f"{len(bad)} of {len(self)} points of the sweep are impossible parameter sets; first: point {i} "
+                f"{shown}: {exc}. Narrow the ranges, or vary coupled parameters together with a factor "
+                "(e.g. factors={'friction': ('mu_c', 'mu_s')})")
+        return out
+
+    # --- tasks and cache keys -------------------------------------------------------------------
+    def task(self, params: Parameters) -> dict:
+        """Return the picklable description of one simulation (what a worker runs).
+
+        Parameters
+        ----------
+        params : Parameters
+            The point's parameters.
+
+        Returns
+        -------
+        dict
+            ``key`` (cache key), ``params`` (dict), ``model``, ``t_end`` [s],
+            ``effects``, ``remove``, ``options`` and ``custom`` outputs.
+        """
+        ident = {
+            "format": 1,
+            "code": code_fingerprint(),
+            "model": self.model,
+            "t_end": self.t_end,
+            "effects": list(self.effects),
+            "remove": list(self.remove),
+            "options": self.options,
+            "params": params.as_dict(),
+            "custom": sorted((k, f"{f.__module__}.{getattr(f, '__qualname__', repr(f))}")
+                             for k, f in self.custom_outputs.items()),
+        }
+        text = json.dumps(ident, sort_keys=True, allow_nan=False)
+        return {"key": hashlib.sha256(text.encode()).hexdigest()[:32], "params": ident["params"],
+                "model": self.model, "t_end": self.t_end, "effects": self.effects, "remove": self.remove,
+                "options": self.options, "custom": self.custom_outputs}
+
+    def describe(self) -> str:
+        """Return a few lines saying what the study runs.
+
+        Returns
+        -------
+        str
+        """
+        lines = [f"study {self.name!r}: {len(self)} {self.model} start-ups of {self.t_end:g} s "
+                 f"({self.space.method})"]
+        for nm, txt in self.space.describe().items():
+            unit = SPECS[nm].unit if nm in SPECS else "factor on " + ", ".join(self.factors[nm])
+            lines.append(f"  {nm:<14} {txt}  [{unit}]")
+        lines.append("  outputs        " + ", ".join(self.outputs))
+        return "\n".join(lines)
+
+    def run(self, executor=None, *, workers: int | None = None, cache=None, progress: bool = True):
+        """Run the study; see :func:`kilnctl.sweep.run_sweep` for the arguments.
+
+        Returns
+        -------
+        SweepResult
+        """
+        from .engine import run_sweep
+
+        return run_sweep(self, executor, workers=workers, cache=cache, progress=progress)
+
