@@ -250,7 +250,7 @@ class Response:
             if gap.any():
                 axes[3].fill_between(t, 0, 1, where=gap, transform=axes[3].get_xaxis_transform(),
                                      color="C3", alpha=0.15, label="teeth not in driving contact")
-                axes[3].legend(loc="upper right")
+                axes[3].legend(loc="lower right")
         axes[3].set_xlabel("time [s]")
         for ax in axes:
             ax.grid(True, alpha=0.3)

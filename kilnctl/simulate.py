@@ -473,8 +473,8 @@ def simulate(params: Parameters | None = None, model: str = "macro", t_end: floa
     modes = {v: k for k, v in eng.mode_index.items()}
     mode_arrays = {}
     for ci, c in enumerate(plant.moded):
-        names = np.array([modes[i][ci] for i in range(len(modes))])
-        mode_arrays[c.name] = names[code]
+        labels = np.array([modes[i][ci] for i in range(len(modes))])
+        mode_arrays[c.name] = labels[code]
     return Response(
         t=T,
         outputs=dict(zip(plant.output_names, Y)),

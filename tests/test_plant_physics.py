@@ -137,3 +137,21 @@ def test_printed_law_chattering_case_is_bounded():
     assert math.tan(r["psi"][t.index(brk[0].t)]) == pytest.approx(p.mu_s, abs=1e-6)
     assert math.tan(r["psi"][t.index(brk[1].t)]) == pytest.approx(p.mu_c * p.R / p.L, rel=1e-3)
     assert r.burden_mode[-1] == "slip_pos"
+
+
+def test_macro_tooth_force_is_the_reducer_torque_while_sticking():
+    # Truth (eq. 9 and a free-body of the motor shaft): the girth gear receives
+    # n*(k_i*i_a - B_m*omega_m - J_m*domega_m/dt); at constant speed W_t = n*(k_i*i_a - B_m*omega_m)/R_o.
+    p = Parameters(gains="given", k_p=0.08, k_I=2.2, k_D=0.014, friction_law="torque")
+    r = simulate(p, "macro", 17.0, dt=1e-3)
+    k = np.searchsorted(r.t, 16.0)
+    assert r.burden_mode[k] == "stick"
+    w = r["omega_motor"][k]
+    hand = p.n * (p.k_i * r["i_a"][k] - p.B_m * w) / p.R_o
+    assert r["W_t"][k] == pytest.approx(hand, rel=2e-3)  # speed nearly constant: J_m*dw/dt is small
+    assert r["sigma"][k] == pytest.approx(r["W_t"][k] / (p.face_width * p.module * p.Y_lewis))
+
+
+def test_response_lists_its_components():
+    r = simulate(Parameters(gains="given", k_p=0.08, k_I=2.2, k_D=0.014), "macro", 1.0, effects=("second_motor",))
+    assert "second_motor" in r.components and "burden" in r.components

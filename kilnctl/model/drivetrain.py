@@ -21,7 +21,8 @@ class Gearbox(Component):
     """Rigid reduction motor -> kiln with total ratio n (macro model, eq. 9).
 
     The transmitted tangential force at the girth gear, W_t, is the torque the
-    reducer delivers to the kiln divided by R_o.
+    reducer delivers to the kiln, n*(motor torque - J_m*domega_m/dt - friction),
+    divided by R_o.
     """
 
     name = "gearbox"
@@ -33,7 +34,9 @@ class Gearbox(Component):
         e.link("motor", "kiln", e.p.n)
 
     def finish(self, e, mode):
-        e.sig["W_t"] = e.link_torque("kiln") / e.p.R_o
+        # torque the reducer delivers to the kiln: n times the torque the motor shaft gives up to it
+        # (not the kiln's net link torque, which also holds the burden link while the burden sticks)
+        e.sig["W_t"] = -e.p.n * e.link_torque("motor") / e.p.R_o
 
 
 @register
