@@ -59,9 +59,6 @@ def test_macro_gear_stress_agrees_while_the_burden_slips():
     assert np.max(np.abs(r["sigma"][slip] - s_b)) < 1e-5 * np.max(np.abs(s_b))
 
 
-@pytest.mark.xfail(reason="kilnctl's macro gear force W_t = link torque into the kiln node leaves out the burden "
-                          "torque the wall transmits while the burden sticks (reported to the simulator owner)",
-                   strict=False)
 def test_macro_gear_stress_while_the_burden_sticks():
     # Truth: while stuck, the reducer turns kiln and burden: W_t*R_o = (J_o+J_v)*acc + m_v*g*L*sin(psi) + T_brg
     p = Parameters(friction_law="torque", **GIVEN)
