@@ -377,6 +377,44 @@ class ParameterLocusData:
     gains: PIDGains
     requirements: Requirements | None = None
 
+    def dominant_wn(self, condition: str = "stick") -> np.ndarray:
+        """Return the natural frequency of the dominant (slowest) pole at each value.
+
+        Parameters
+        ----------
+        condition : {"stick", "slip"}
+            Load condition.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``|p|`` of the pole nearest the imaginary axis [rad/s], one per value.
+        """
+        P = self._poles(condition)
+        return np.abs(P[np.arange(len(P)), np.argmax(P.real, axis=1)])
+
+    def pair_zeta(self, condition: str = "stick") -> np.ndarray:
+        """Return the damping ratio of the electromechanical pair at each value.
+
+        Parameters
+        ----------
+        condition : {"stick", "slip"}
+            Load condition.
+
+        Returns
+        -------
+        numpy.ndarray
+            Damping ratio [-] of the pole with the largest imaginary part, one per value.
+        """
+        P = self._poles(condition)
+        upper = P[np.arange(len(P)), np.argmax(P.imag, axis=1)]
+        return -upper.real / np.abs(upper)
+
+    def _poles(self, condition: str) -> np.ndarray:
+        if condition not in self.poles:
+            raise DesignError(f"no poles for condition {condition!r}: have {', '.join(self.poles)}")
+        return self.poles[condition]
+
     def plot(self, axes=None):
         """Draw the poles over the parameter: s-plane, dominant pole, electromechanical pair.
 

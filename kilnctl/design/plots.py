@@ -334,7 +334,6 @@ def plot_parameter_locus(data, axes=None):
     upper_all = []
     for cond, P in data.poles.items():
         st = STYLE.get(cond, {})
-        dom = P[rows, np.argmax(P.real, axis=1)]
         upper = P[rows, np.argmax(P.imag, axis=1)]
         upper_all.append(upper)
         moving = np.ptp(np.abs(upper)) > 1e-9 * np.abs(upper).max()
@@ -348,8 +347,8 @@ def plot_parameter_locus(data, axes=None):
         J = data.inertias[cond]
         jtext = (f"J = {J.min():.2f} to {J.max():.2f} kg·m²" if np.ptp(J) > 1e-9 * J.max()
                  else f"J = {J[0]:.2f} kg·m² (fixed)")
-        ax_d.plot(x, np.abs(dom), color=st.get("color"), ls=st.get("ls"), lw=2, label=f"{cond}: {jtext}")
-        ax_p.plot(x, -upper.real / np.abs(upper), color=st.get("color"), ls=st.get("ls"), lw=2, label=cond)
+        ax_d.plot(x, data.dominant_wn(cond), color=st.get("color"), ls=st.get("ls"), lw=2, label=f"{cond}: {jtext}")
+        ax_p.plot(x, data.pair_zeta(cond), color=st.get("color"), ls=st.get("ls"), lw=2, label=cond)
     if sc is not None:
         fig.colorbar(sc, ax=ax_s, label=xlabel, shrink=0.9)
     up = np.concatenate(upper_all)
