@@ -20,6 +20,7 @@ Needs the optional dependencies: ``pip install 'kilnctl[sweep]'``.
 """
 
 from .engine import EXECUTORS, PointCache, run_point, run_sweep
+from .limits import GIRTH_GEAR_HARDNESS_HB, allowable_bending_stress
 from .result import SweepResult, wilson_interval
 from .space import DISTRIBUTIONS, Grid, LatinHypercube, LogUniform, MonteCarlo, Normal, Triangular, TruncNormal, Uniform
 from .spec import METHODS, SpecError, load_spec, study_from_dict
@@ -30,4 +31,5 @@ __all__ = [
     "Uniform", "LogUniform", "Normal", "TruncNormal", "Triangular", "DISTRIBUTIONS",
     "load_spec", "study_from_dict", "SpecError", "METHODS", "OUTPUTS", "SIM_OPTIONS", "EXECUTORS",
     "PointCache", "run_point", "wilson_interval", "code_fingerprint",
+    "allowable_bending_stress", "GIRTH_GEAR_HARDNESS_HB",
 ]

@@ -59,13 +59,32 @@ def wilson_interval(k: int, n: int, z: float = 1.96) -> tuple[float, float]:
     return max(0.0, centre - half), min(1.0, centre + half)
 
 
-def _label(name: str) -> str:
-    """Axis label with unit of a variable or output."""
-    if name in SPECS:
-        return f"{name} [{SPECS[name].unit}]"
-    if name in OUTPUTS:
-        return f"{name} [{OUTPUTS[name][0]}]"
-    return name
+#: display units for figures: SI unit -> (threshold of the largest value, scale, shown unit)
+_DISPLAY = {"m": (0.1, 1e3, "mm"), "kg": (1e4, 1e-3, "t"), "Pa": (1e5, 1e-6, "MPa")}
+
+
+def _axis(name: str, values, factors=None) -> tuple[float, str]:
+    """Return (scale, unit) for plotting a variable or output: SI values times scale are in that unit."""
+    if factors and name in factors:
+        return 1.0, "x base " + ", ".join(factors[name])
+    unit = SPECS[name].unit if name in SPECS else OUTPUTS[name][0] if name in OUTPUTS else ""
+    if unit in _DISPLAY:
+        big, scale, shown = _DISPLAY[unit]
+        vals = np.abs(np.asarray(values, dtype=float))
+        if vals.size and (np.nanmax(vals) < big if unit == "m" else np.nanmax(vals) >= big):
+            return scale, shown
+    return 1.0, unit
+
+
+def _scaled(name: str, values, factors=None) -> tuple[float, str]:
+    """Return (scale, axis label) of a variable or output."""
+    scale, unit = _axis(name, values, factors)
+    return scale, _label(name, unit)
+
+
+def _label(name: str, unit: str) -> str:
+    """Axis label ``name [unit]`` (no brackets for a dimensionless quantity)."""
+    return f"{name} [{unit}]" if unit and unit != "-" else name
 
 
 class SweepResult:
@@ -316,84 +335,101 @@ class SweepResult:
         if ok.empty:
             raise KilnctlError("every point of the sweep failed: nothing to plot")
         fig = Figure(figsize=(10, 6.5)) if fig is None else fig
-        scale, unit = (1e6, "MPa") if output.endswith("_Pa") else (1.0, OUTPUTS.get(output, ("",))[0])
-        ylab = f"{output} [{unit}]" if unit else output
+        fig.set_layout_engine("constrained")
         if len(self.variables) == 1:
-            self._plot_line(fig, ok, output, scale, ylab, threshold)
+            self._plot_line(fig, ok, output, threshold)
         elif self.study.space.method == "grid":
-            self._plot_maps(fig, ok, output, scale, ylab, threshold)
+            self._plot_maps(fig, ok, output, threshold)
         else:
-            self._plot_sample(fig, ok, output, scale, ylab, threshold)
+            self._plot_sample(fig, ok, output, threshold)
         n_fail = self.info.get("n_failed", 0)
         fig.suptitle(f"{self.study.name}: {len(self)} {self.study.model}-model start-ups of {self.study.t_end:g} s"
                      + (f" ({n_fail} failed, left out)" if n_fail else ""), fontsize=11)
-        fig.tight_layout()
         return fig
 
-    def _plot_line(self, fig, ok, output, scale, ylab, threshold):
+    def _plot_line(self, fig, ok, output, threshold):
         ax = fig.subplots()
         v = self.variables[0]
         d = ok.sort_values(v)
+        sx, xlab = _scaled(v, d[v], self.study.factors)
+        sy, ylab = _scaled(output, d[output])
         style = "o-" if self.study.space.method == "grid" else "o"
-        ax.plot(d[v], d[output] / scale, style, color="C0")
+        ax.plot(d[v] * sx, d[output] * sy, style, color="C0")
         if threshold is not None:
-            ax.axhline(threshold / scale, color="C3", ls="--", label=f"limit {threshold / scale:g}")
+            ax.axhline(threshold * sy, color="C3", ls="--", label=f"limit {threshold * sy:g}")
             ax.legend()
-        ax.set_xlabel(_label(v))
+        ax.set_xlabel(xlab)
         ax.set_ylabel(ylab)
         ax.grid(True, alpha=0.3)
 
-    def _plot_maps(self, fig, ok, output, scale, ylab, threshold):
-        xv, yv = self.variables[1], self.variables[0]
+    def _plot_maps(self, fig, ok, output, threshold):
+        yv, xv = self.variables[0], self.variables[1]
         rest = self.variables[2:]
         panel_var = rest[0] if rest else None
-        panels = sorted(ok[panel_var].unique()) if panel_var else [None]
-        panels = panels[:12]
         d = ok
         if len(rest) > 1:  # further variables: worst case over them
             d = ok.groupby(list(self.variables[:3]), as_index=False)[output].max()
-        vmin, vmax = d[output].min() / scale, d[output].max() / scale
+        panels = sorted(d[panel_var].unique())[:12] if panel_var else [None]
+        sx, xlab = _scaled(xv, d[xv], self.study.factors)
+        sy, ylab = _scaled(yv, d[yv], self.study.factors)
+        sz, zlab = _scaled(output, d[output])
+        vmin, vmax = d[output].min() * sz, d[output].max() * sz
         ncol = min(len(panels), 3)
         nrow = math.ceil(len(panels) / ncol)
-        axes = np.atleast_1d(fig.subplots(nrow, ncol, squeeze=False)).ravel()
+        axes = fig.subplots(nrow, ncol, squeeze=False, sharex=True, sharey=True).ravel()
         mesh = None
         for ax, pv in zip(axes, panels):
             sub = d if pv is None else d[d[panel_var] == pv]
-            g = sub.pivot(index=yv, columns=xv, values=output) / scale
-            X, Y = np.meshgrid(np.asarray(g.columns, float), np.asarray(g.index, float))
-            mesh = ax.pcolormesh(X, Y, g.to_numpy(), shading="nearest", vmin=vmin, vmax=vmax, cmap="viridis")
-            if threshold is not None and g.shape[0] > 1 and g.shape[1] > 1 and vmin < threshold / scale < vmax:
-                ax.contour(X, Y, g.to_numpy(), levels=[threshold / scale], colors="C3", linewidths=2)
+            g = sub.pivot(index=yv, columns=xv, values=output) * sz
+            X, Y = np.meshgrid(np.asarray(g.columns, float) * sx, np.asarray(g.index, float) * sy)
+            Z = g.to_numpy()
+            mesh = ax.pcolormesh(X, Y, Z, shading="nearest", vmin=vmin, vmax=vmax, cmap="viridis")
+            if threshold is not None and min(Z.shape) > 1 and np.nanmax(Z) > threshold * sz:
+                ax.contourf(X, Y, Z, levels=[threshold * sz, np.inf], colors="none", hatches=["//"])
+                if np.nanmin(Z) < threshold * sz:
+                    ax.contour(X, Y, Z, levels=[threshold * sz], colors="C3", linewidths=2)
             worst = sub.loc[sub[output].idxmax()]
-            ax.plot(worst[xv], worst[yv], marker="*", ms=14, color="C3", mec="w")
-            ax.set_xlabel(_label(xv))
-            ax.set_ylabel(_label(yv))
+            ax.plot(worst[xv] * sx, worst[yv] * sy, marker="*", ms=14, color="C3", mec="w")
             if pv is not None:
-                ax.set_title(f"{panel_var} = {pv:g}", fontsize=9)
+                ps, punit = _axis(panel_var, [pv], self.study.factors)
+                shown = "" if punit.startswith("x ") or punit == "-" else f" {punit}"
+                ax.set_title(f"{panel_var} = {pv * ps:g}{shown}", fontsize=9)
         for ax in axes[len(panels):]:
             ax.set_visible(False)
-        cb = fig.colorbar(mesh, ax=list(axes[:len(panels)]))
-        cb.set_label(ylab + ("" if threshold is None else f"; red line: {threshold / scale:g}")
-                     + "; star: worst point")
+        for ax in axes[(nrow - 1) * ncol:]:
+            ax.set_xlabel(xlab)
+        for ax in axes[::ncol]:
+            ax.set_ylabel(ylab)
+        cb = fig.colorbar(mesh, ax=list(axes[:len(panels)]), shrink=0.9)
+        cb.set_label(zlab + ("" if threshold is None else f"; hatched: above {threshold * sz:.4g}") + "; star: worst")
 
-    def _plot_sample(self, fig, ok, output, scale, ylab, threshold):
+    def _plot_sample(self, fig, ok, output, threshold):
         nv = len(self.variables)
         axes = fig.subplots(1, 1 + min(nv, 3), squeeze=False)[0]
-        vals = ok[output].to_numpy(float) / scale
+        sz, zlab = _scaled(output, ok[output])
+        vals = ok[output].to_numpy(float) * sz
         axes[0].hist(vals, bins=max(10, min(50, int(np.sqrt(len(vals))) * 2)), color="C0", alpha=0.8)
-        axes[0].set_xlabel(ylab)
+        axes[0].set_xlabel(zlab)
         axes[0].set_ylabel("points")
+        # exceedance curve: fraction of points above each level (empirical survival function)
+        levels = np.sort(vals)
+        frac = 1.0 - np.arange(1, len(levels) + 1) / len(levels)
+        twin = axes[0].twinx()
+        twin.step(levels, frac, where="post", color="k", lw=1.0)
+        twin.set_ylim(0, 1.02)
+        twin.set_ylabel("fraction of points above (black)")
         if threshold is not None:
             ex = self.exceedance(output, threshold)
-            axes[0].axvline(threshold / scale, color="C3", ls="--")
-            axes[0].set_title(f"P(> {threshold / scale:g}) = {ex['probability']:.3f} "
-                              f"[{ex['ci_low']:.3f}, {ex['ci_high']:.3f}] (95 %)", fontsize=9)
+            axes[0].axvline(threshold * sz, color="C3", ls="--")
+            axes[0].set_title(f"P(> {threshold * sz:.4g}) = {ex['probability']:.3f}, 95 % interval "
+                              f"[{ex['ci_low']:.3f}, {ex['ci_high']:.3f}]", fontsize=9)
         for ax, v in zip(axes[1:], self.variables):
-            ax.plot(ok[v], vals, ".", alpha=0.6)
-            ax.set_xlabel(_label(v))
-            ax.set_ylabel(ylab)
+            sx, xlab = _scaled(v, ok[v], self.study.factors)
+            ax.plot(ok[v] * sx, vals, ".", alpha=0.6)
+            ax.set_xlabel(xlab)
+            ax.set_ylabel(zlab)
             if threshold is not None:
-                ax.axhline(threshold / scale, color="C3", ls="--")
+                ax.axhline(threshold * sz, color="C3", ls="--")
         for ax in axes:
             ax.grid(True, alpha=0.3)
 
