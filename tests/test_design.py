@@ -261,6 +261,13 @@ def test_plots_draw_the_computed_data(result, tmp_path):
     for cond in ("stick", "slip"):
         for p in result.reports[cond].poles:
             assert min(abs(np.array(drawn) - p)) < 1e-9
+    # a click on the zoom panel next to the dominant pole marks it and shows kappa = 1 (no GUI needed)
+    from types import SimpleNamespace
+    ax_zoom = fig.axes[1]
+    fig._kilnctl_click(SimpleNamespace(inaxes=ax_zoom, xdata=-4.5, ydata=0.02))
+    shown = [t.get_text() for t in ax_zoom.texts if t.get_text().startswith("stick:") or
+             t.get_text().startswith("slip:")]
+    assert len(shown) == 1 and re.search(r"kappa = 1(\.0+)?:", shown[0])
     out = tmp_path / "rl.png"
     out.write_bytes(b"old")
     save_figure(fig, out, dpi=30)

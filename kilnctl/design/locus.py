@@ -13,10 +13,10 @@ from dataclasses import dataclass
 import control as ct
 import numpy as np
 
-from ..errors import DesignError
+from ..errors import DesignError, ParameterError, close_matches_hint
 from ..linear import CONDITIONS, closed_loop_ss, inertia, loop_tf
 from ..params import SPECS, Parameters
-from .analysis import ConditionReport, analyse
+from .analysis import analyse
 from .gains import PIDGains
 from .requirements import Requirements
 
@@ -27,10 +27,10 @@ __all__ = ["LocusBranches", "RootLocusData", "root_locus", "StepResponseData", "
 ACCRETION_RANGE = (240e3, 974e3)
 
 
-def _check_conditions(conditions) -> tuple[str, ...]:
+def _check_conditions(params: Parameters, conditions) -> tuple[str, ...]:
     conditions = tuple(conditions)
     for c in conditions:
-        inertia(Parameters(), c)  # raises ModelError naming the valid conditions
+        inertia(params, c)  # raises ModelError naming the valid conditions
     if not conditions:
         raise DesignError("conditions is empty: give 'stick', 'slip' or both")
     return conditions
@@ -232,7 +232,7 @@ def root_locus(params: Parameters, gains: PIDGains, *, conditions=CONDITIONS, ka
     -------
     RootLocusData
     """
-    conditions = _check_conditions(conditions)
+    conditions = _check_conditions(params, conditions)
     refine = kappas is None
     if kappas is None:
         kappas = _default_kappas()
@@ -320,7 +320,7 @@ def step_responses(params: Parameters, gains: PIDGains, *, conditions=CONDITIONS
     -------
     StepResponseData
     """
-    conditions = _check_conditions(conditions)
+    conditions = _check_conditions(params, conditions)
     reports = {c: analyse(params, gains, c) for c in conditions}
     if t_final is None:
         ts = [r.settling_time for r in reports.values() if r.settling_time]
@@ -453,7 +453,7 @@ def vary(params: Parameters, parameter: str, value: float, *, carry_inertia: boo
     Parameters
     """
     if parameter not in SPECS:
-        params[parameter]  # raises ParameterError with the close matches
+        raise ParameterError(f"unknown parameter {parameter!r}: {close_matches_hint(parameter, SPECS)}")
     if SPECS[parameter].is_option:
         raise DesignError(f"parameter {parameter!r} is an option, not a number: a locus needs a numeric parameter")
     changes = {parameter: float(value)}
@@ -510,7 +510,7 @@ def parameter_locus(params: Parameters, gains: PIDGains, values=None, parameter:
     -------
     ParameterLocusData
     """
-    conditions = _check_conditions(conditions)
+    conditions = _check_conditions(params, conditions)
     if values is None:
         if parameter == "m_v":
             values = np.linspace(*ACCRETION_RANGE, 50)

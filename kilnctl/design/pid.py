@@ -24,13 +24,12 @@ import functools
 import math
 from dataclasses import dataclass, field
 
-import control as ct
 import numpy as np
 
 from ..errors import DesignError
-from ..linear import CONDITIONS, electromechanical_frequency, inertia, loop_tf
+from ..linear import CONDITIONS, electromechanical_frequency, inertia
 from ..params import Parameters
-from .analysis import ConditionReport, analyse, unmet_requirements
+from .analysis import analyse, unmet_requirements
 from .gains import GAIN_UNITS, PIDGains
 from .requirements import Requirements, torsional_mode_frequency
 
