@@ -11,6 +11,7 @@ import math
 import numpy as np
 import pytest
 
+from kilnctl import Parameters
 from kilnctl.errors import ParameterError
 from kilnctl.sweep import (Grid, LatinHypercube, LogUniform, MonteCarlo, Normal, Study, Triangular, TruncNormal,
                            Uniform)
@@ -130,3 +131,17 @@ def test_impossible_points_are_reported_before_any_run():
     st = Study(MonteCarlo({"mu_c": Uniform(0.3, 0.5), "mu_s": Uniform(0.35, 0.55)}, n=200, seed=0))
     with pytest.raises(ParameterError, match=r"of 200 points .* impossible.*mu_c.*factor"):
         st.parameter_sets()
+
+
+def test_gains_are_designed_once_for_the_base_unless_redesign():
+    from kilnctl.simulate import resolve_gains
+
+    space = Grid({"burden": [0.5, 1.5]})
+    once = Study(space, factors={"burden": ("m_v", "J_v")}).parameter_sets()
+    nominal = resolve_gains(Parameters())
+    assert all(p.gains == "given" and (p.k_p, p.k_I, p.k_D) == (nominal.k_p, nominal.k_I, nominal.k_D)
+               for p in once)
+    each = Study(space, factors={"burden": ("m_v", "J_v")}, redesign=True).parameter_sets()
+    assert all(p.gains == "design" for p in each)  # the simulation designs them for each J_v
+    with pytest.raises(ParameterError, match="redesign"):
+        Study(Grid({"k_p": [0.5, 1.0]}), redesign=True)

@@ -12,6 +12,7 @@ The format (every key but ``[parameters]`` is optional)::
     config  = "plant.toml"        # base parameter file, relative to this file (default: Table 1)
     effects = ["second_motor"]    # components added to the model
     remove  = []                  # components taken out
+    redesign = false              # true: design the PID gains anew at every point (default: once, for the base)
 
     [base]                        # parameter values on top of config, for every point
     ramp_rate = 74.0
@@ -61,8 +62,8 @@ __all__ = ["SpecError", "load_spec", "study_from_dict", "METHODS"]
 #: sampling methods of a spec, by name
 METHODS = {"grid": Grid, "lhs": LatinHypercube, "montecarlo": MonteCarlo}
 
-_TOP = ("name", "model", "t_end", "method", "n", "seed", "outputs", "config", "effects", "remove", "base",
-        "parameters", "options")
+_TOP = ("name", "model", "t_end", "method", "n", "seed", "outputs", "config", "effects", "remove", "redesign",
+        "base", "parameters", "options")
 #: arguments of each distribution in spec keys, in the constructor's order
 _DIST_ARGS = {"uniform": ("min", "max"), "loguniform": ("min", "max"), "normal": ("mean", "std"),
               "truncnormal": ("mean", "std", "min", "max"), "triangular": ("min", "mode", "max")}
@@ -198,7 +199,14 @@ def study_from_dict(spec: Mapping[str, Any], base_dir: str | Path = ".", name: s
         raise SpecError("[options] must be a table of simulation options")
     return Study(space, outputs, model=spec.get("model", "micro"), t_end=spec.get("t_end", 40.0), base=base,
                  effects=spec.get("effects", ()), remove=spec.get("remove", ()), factors=factors,
-                 options=options, name=str(spec.get("name", name)))
+                 options=options, name=str(spec.get("name", name)), redesign=_flag(spec, "redesign"))
+
+
+def _flag(spec, key: str) -> bool:
+    v = spec.get(key, False)
+    if not isinstance(v, bool):
+        raise SpecError(f"{key} = {v!r} must be true or false")
+    return v
 
 
 def load_spec(path: str | Path) -> Study:

@@ -102,6 +102,12 @@ class Study:
         (``dt`` [s], ``rtol``, ``atol`` ...).
     name : str, default 'sweep'
         Name shown in the progress bar and in the result.
+    redesign : bool, default False
+        With ``base.gains == 'design'``: False designs the PID gains once, for
+        the base parameters, and keeps them at every point (a kiln's
+        controller is not retuned as its burden or backlash changes, and one
+        design is far cheaper than one per point); True designs them anew at
+        every point.
 
     Raises
     ------
@@ -116,7 +122,7 @@ class Study:
                  model: str = "micro", t_end: float = 40.0, base: Parameters | None = None,
                  effects: Sequence[str] = (), remove: Sequence[str] = (),
                  factors: Mapping[str, Sequence[str]] | None = None, options: Mapping | None = None,
-                 name: str = "sweep"):
+                 name: str = "sweep", redesign: bool = False):
         from ..model import component_names
 
         if not isinstance(space, Space):
@@ -133,6 +139,8 @@ class Study:
             raise ParameterError(f"t_end = {t_end!r} must be a finite number of seconds > 0")
         self.t_end = float(t_end)
         self.name = str(name)
+        self.redesign = bool(redesign)
+        self._controlled: Parameters | None = None
         self.factors = {k: tuple(v) for k, v in (factors or {}).items()}
         self._check_factors()
         self._check_variables()
@@ -161,6 +169,10 @@ class Study:
             if nm not in known:
                 raise ParameterError(f"unknown sweep variable {nm!r}: {close_matches_hint(nm, known)} "
                                      "(a variable is a parameter name or a factor declared in factors=)")
+        gain_vars = {"k_p", "k_I", "k_D"} & set(self.space.names)
+        if gain_vars and self.redesign and self.base.gains == "design":
+            raise ParameterError(f"sweeping {sorted(gain_vars)} has no effect with redesign=True and gains = "
+                                 "'design': the design sets the gains at every point; use redesign=False")
         unused = set(self.factors) - set(self.space.names)
         if unused:
             raise ParameterError(f"factor(s) {sorted(unused)} declared but not in the space")
@@ -198,6 +210,24 @@ class Study:
         """Return the values of every variable at every point (see :meth:`Space.samples`)."""
         return self.space.samples()
 
+    def controlled_base(self) -> Parameters:
+        """Return the base parameters with the PID gains every point starts from.
+
+        Returns
+        -------
+        Parameters
+            ``base`` itself with ``redesign=True`` or given gains; otherwise
+            ``base`` with the gains designed for it (``gains = 'given'``).
+        """
+        if self._controlled is None:
+            if self.redesign or self.base.gains == "given":
+                self._controlled = self.base
+            else:
+                from ..simulate import resolve_gains
+
+                self._controlled = resolve_gains(self.base)
+        return self._controlled
+
     def params_at(self, values: Mapping[str, float | str]) -> Parameters:
         """Return the parameter set of one point.
 
@@ -209,17 +239,19 @@ class Study:
         Returns
         -------
         Parameters
-            ``base`` with the point's values; a factor multiplies the base value
-            of each parameter it names (two factors on one parameter multiply).
+            :meth:`controlled_base` with the point's values; a factor
+            multiplies the base value of each parameter it names (two factors
+            on one parameter multiply).
         """
+        base = self.controlled_base()
         changes: dict[str, float | str] = {}
         for nm, v in values.items():
             if nm in self.factors:
                 for t in self.factors[nm]:
-                    changes[t] = changes.get(t, self.base[t]) * float(v)
+                    changes[t] = changes.get(t, base[t]) * float(v)
             else:
                 changes[nm] = v.item() if isinstance(v, np.generic) else v
-        return self.base.replace(**changes)
+        return base.replace(**changes)
 
     def parameter_sets(self) -> list[Parameters]:
         """Return the parameter set of every point, checked before any simulation runs.
@@ -295,6 +327,9 @@ class Study:
         for nm, txt in self.space.describe().items():
             unit = SPECS[nm].unit if nm in SPECS else "factor on " + ", ".join(self.factors[nm])
             lines.append(f"  {nm:<14} {txt}  [{unit}]")
+        if self.base.gains == "design":
+            lines.append("  PID gains      " + ("designed at every point" if self.redesign else
+                                                "designed once for the base parameters"))
         lines.append("  outputs        " + ", ".join(self.outputs))
         return "\n".join(lines)
 
