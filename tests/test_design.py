@@ -305,3 +305,13 @@ def test_every_public_function_documents_every_parameter():
             if not re.search(rf"^\s*\**{pname}\b.*:", doc, re.M):
                 missing.append(f"{qual}: parameter {pname}")
     assert not missing, missing
+
+
+def test_fast_step_and_bandwidth_match_python_control(result):
+    # truth: control.step_response and control.bandwidth on the same closed loop
+    from kilnctl.design.analysis import closed_loop_bandwidth, step_samples
+    sys = linear.closed_loop_ss(P, result.gains, "slip")[0, 0] * P.K_fb
+    t = np.linspace(0, 2, 801)
+    np.testing.assert_allclose(step_samples(sys, t), ct.step_response(sys, timepts=t).outputs, atol=1e-10)
+    assert closed_loop_bandwidth(sys) == pytest.approx(ct.bandwidth(sys), rel=1e-6)
+    assert result.reports["slip"].bandwidth == pytest.approx(ct.bandwidth(sys), rel=1e-6)

@@ -13,7 +13,8 @@ from ..params import Parameters
 from .gains import PIDGains
 from .requirements import Requirements
 
-__all__ = ["ConditionReport", "analyse", "damping", "dominant_poles", "unmet_requirements"]
+__all__ = ["ConditionReport", "analyse", "damping", "dominant_poles", "unmet_requirements", "step_samples",
+           "closed_loop_bandwidth"]
 
 #: points of the step response used for step information
 _STEP_POINTS = 3000
@@ -197,6 +198,78 @@ def _step_time(poles: np.ndarray) -> np.ndarray:
     return np.linspace(0.0, t_final, n)
 
 
+def step_samples(sys: ct.StateSpace, t: np.ndarray) -> np.ndarray:
+    """Return the exact sampled unit-step response of a SISO state-space system.
+
+    Zero-order-hold discretisation (``scipy.linalg.expm`` of the augmented
+    matrix) is exact for a step input; a few milliseconds for 3 000 samples,
+    against about 0.15 s for ``control.step_response``.
+
+    Parameters
+    ----------
+    sys : control.StateSpace
+        Single-input, single-output system, zero initial state.
+    t : numpy.ndarray
+        Equally spaced times from 0 [s].
+
+    Returns
+    -------
+    numpy.ndarray
+        Output at ``t`` (units of the output per unit of input).
+    """
+    from scipy.linalg import expm
+
+    A, B, C, D = (np.asarray(m, dtype=float) for m in (sys.A, sys.B, sys.C, sys.D))
+    n = A.shape[0]
+    dt = float(t[1] - t[0])
+    M = np.zeros((n + 1, n + 1))
+    M[:n, :n], M[:n, n:] = A * dt, B * dt
+    E = expm(M)
+    Ad, bd = E[:n, :n], E[:n, n]
+    x = np.zeros((len(t), n))
+    for k in range(1, len(t)):
+        x[k] = Ad @ x[k - 1] + bd
+    return x @ C[0] + D[0, 0]
+
+
+def closed_loop_bandwidth(sys: ct.StateSpace, dbdrop: float = -3.0) -> float:
+    """Return the first frequency where the gain falls ``dbdrop`` below its DC value.
+
+    The same definition as ``control.bandwidth``, evaluated on the transfer
+    function's polynomials and refined by bisection (``control.bandwidth``
+    takes about 0.25 s here).
+
+    Parameters
+    ----------
+    sys : control.StateSpace
+        Stable single-input, single-output system with a non-zero DC gain.
+    dbdrop : float, default -3
+        Drop [dB], negative.
+
+    Returns
+    -------
+    float
+        Bandwidth [rad/s]; ``inf`` when the gain never drops that far.
+    """
+    from scipy.optimize import brentq
+
+    tf = ct.ss2tf(sys)
+    num, den = np.asarray(tf.num[0][0], float), np.asarray(tf.den[0][0], float)
+    level = abs(num[-1] / den[-1]) * 10 ** (dbdrop / 20)
+    scale = max(1e-6, float(np.max(np.abs(np.roots(den))))) if len(den) > 1 else 1.0
+    w = np.logspace(np.log10(scale) - 6, np.log10(scale) + 3, 2000)
+
+    def excess(x):
+        return np.abs(np.polyval(num, 1j * x) / np.polyval(den, 1j * x)) - level
+
+    e = excess(w)
+    below = np.nonzero(e < 0)[0]
+    if below.size == 0:
+        return math.inf
+    i = below[0]
+    return float(w[0]) if i == 0 else float(brentq(excess, w[i - 1], w[i], xtol=1e-12, rtol=1e-12))
+
+
 def analyse(params: Parameters, gains: PIDGains, condition: str = "stick") -> ConditionReport:
     """Compute the closed-loop figures of the speed loop in one load condition.
 
@@ -230,12 +303,12 @@ def analyse(params: Parameters, gains: PIDGains, condition: str = "stick") -> Co
     if stable:
         speed = sys[0, 0] * params.K_fb  # K*omega_m/e_v, unit DC gain
         t = _step_time(poles)
-        y = np.asarray(ct.step_response(speed, timepts=t).outputs, dtype=float).ravel()
+        y = step_samples(speed, t)
         info = ct.step_info(y, timepts=t)
         settling, rise, peak, overshoot = (float(info[k]) for k in ("SettlingTime", "RiseTime", "PeakTime",
                                                                    "Overshoot"))
         dip = float(np.max(np.maximum.accumulate(y) - y) / abs(y[-1]) * 100.0)
-        bandwidth = float(ct.bandwidth(speed))
+        bandwidth = closed_loop_bandwidth(speed)
         if gains.k_I > 0:
             den0 = params.R_a * params.B_m + params.k_i * params.k_b
             ramp_lag = params.ramp_rate / (params.K_fb * gains.k_I * params.k_i / den0)
