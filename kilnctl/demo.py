@@ -30,7 +30,7 @@ def _step(title: str) -> float:
 
 
 def _save(fig, path: Path) -> None:
-    from .design.plots import save_figure
+    from .figures import save_figure
 
     save_figure(fig, path)
     import matplotlib.pyplot as plt

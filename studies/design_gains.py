@@ -21,7 +21,7 @@ matplotlib.use("Agg")
 
 from kilnctl import Parameters  # noqa: E402
 from kilnctl.design import PIDGains, analyse, design_pid  # noqa: E402
-from kilnctl.design.plots import save_figure  # noqa: E402
+from kilnctl.figures import save_figure  # noqa: E402
 
 OUT = Path(__file__).parent / "out" / "design_gains"
 

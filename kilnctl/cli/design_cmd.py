@@ -87,7 +87,7 @@ def run(args) -> int:
     if args.plot:
         import matplotlib.pyplot as plt
 
-        from ..design.plots import save_figure
+        from ..figures import save_figure
 
         fig = result.plot()
         save_figure(fig, args.plot)

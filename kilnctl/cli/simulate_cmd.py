@@ -8,12 +8,12 @@ whole or not at all, and never over the ``--config`` file.
 from __future__ import annotations
 
 import os
-import tempfile
 from pathlib import Path
 
 from ..errors import ConfigFileError, SimulationError
 from ..params import SPECS
 from . import print_json
+from ..figures import save_figure
 from .common import add_config_arg, load_params
 
 #: default simulated time [s]: long enough for the paper's 15-17 s settling (Fig. 4, 5)
@@ -88,35 +88,6 @@ def _check_outputs(args) -> None:
         if suffix not in kinds:
             raise ConfigFileError(f"--plot {args.plot}: unknown figure format {suffix!r}; use one of "
                                   + ", ".join(sorted(kinds)))
-
-
-def save_figure(fig, path) -> Path:
-    """Save a matplotlib figure whole or not at all (temporary file, then rename).
-
-    Parameters
-    ----------
-    fig : matplotlib.figure.Figure
-        The figure.
-    path : path-like
-        Destination; the format follows its extension.
-
-    Returns
-    -------
-    Path
-        The path written.
-    """
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".tmp-", suffix=path.suffix)
-    os.close(fd)
-    try:
-        fig.savefig(tmp, dpi=120)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-    return path
 
 
 def summary_dict(resp, friction_law: str, effects, components) -> dict:

@@ -27,7 +27,7 @@ def register(sub) -> None:
 
 def run(args) -> int:
     """Verify and print; return the exit code."""
-    from ..design.plots import save_figure
+    from ..figures import save_figure
     from ..verify import verify
 
     if args.plot and args.config and Path(args.plot).resolve() == Path(args.config).resolve():
