@@ -2,11 +2,10 @@
 
 from __future__ import annotations
 
-import os
-import tempfile
 from pathlib import Path
 
 from .errors import KilnctlError
+from .files import atomic_path
 
 __all__ = ["save_figure"]
 
@@ -34,16 +33,8 @@ def save_figure(fig, path, **kwargs) -> Path:
     if fmt not in fig.canvas.get_supported_filetypes():
         raise KilnctlError(f"{path}: unknown figure format {fmt!r}; use one of "
                            + ", ".join(sorted(fig.canvas.get_supported_filetypes())))
-    path.parent.mkdir(parents=True, exist_ok=True)
     kwargs.setdefault("dpi", 130)
     kwargs.setdefault("bbox_inches", "tight")
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".tmp-", suffix=path.suffix or ".png")
-    os.close(fd)
-    try:
+    with atomic_path(path, suffix=path.suffix or ".png") as tmp:
         fig.savefig(tmp, format=fmt, **kwargs)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
     return path

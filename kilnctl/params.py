@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import math
 import os
-import tempfile
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
@@ -31,6 +30,7 @@ from typing import Any, Iterator, Mapping
 import tomli_w
 
 from .errors import ConfigFileError, ParameterError, close_matches_hint
+from .files import write_atomic
 
 __all__ = ["ParamSpec", "Parameters", "SPECS", "GROUPS"]
 
@@ -402,17 +402,7 @@ class Parameters(Mapping):
         doc: dict[str, dict[str, Any]] = {g: {} for g in GROUPS}
         for s in _SPEC_LIST:
             doc[s.group][s.name] = self._values[s.name]
-        data = tomli_w.dumps(doc).encode()
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".tmp-", suffix=".toml")
-        try:
-            with os.fdopen(fd, "wb") as fh:
-                fh.write(data)
-            os.replace(tmp, path)
-        except BaseException:
-            if os.path.exists(tmp):
-                os.unlink(tmp)
-            raise
+        write_atomic(path, tomli_w.dumps(doc))
         return path
 
     @classmethod

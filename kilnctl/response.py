@@ -4,46 +4,14 @@ from __future__ import annotations
 
 import csv
 import io
-import os
-import tempfile
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
-from .errors import KilnctlError
+from .files import write_atomic
 from .params import Parameters
 
 __all__ = ["Event", "Response", "write_atomic"]
-
-
-def write_atomic(path, data: bytes | str) -> Path:
-    """Write ``data`` to ``path`` whole or not at all (temporary file, then rename).
-
-    Parameters
-    ----------
-    path : path-like
-        Destination.
-    data : bytes or str
-        Content.
-
-    Returns
-    -------
-    Path
-    """
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    raw = data.encode() if isinstance(data, str) else data
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".tmp-", suffix=path.suffix)
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(raw)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-    return path
 
 
 @dataclass(frozen=True)
