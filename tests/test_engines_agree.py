@@ -11,12 +11,16 @@ import numpy as np
 import pytest
 
 from kilnctl import Parameters
+from kilnctl.model.compiled import compiler_available
 from kilnctl.simulate import simulate
+
+needs_cc = pytest.mark.skipif(not compiler_available(), reason="the ros3p engine needs a C compiler (gcc or $CC)")
 
 GIVEN = dict(gains="given", k_p=2.0, k_I=5.0, k_D=0.01)
 KEYS = ("peak_current_A", "final_current_A", "peak_stress_Pa", "final_stress_Pa")
 
 
+@needs_cc
 @pytest.mark.parametrize("model, t_end, law", [("macro", 40.0, "torque"), ("micro", 20.0, "paper")])
 def test_ros3p_and_cvodes_agree(model, t_end, law):
     p = Parameters(friction_law=law, **GIVEN)

@@ -32,8 +32,8 @@ def cache_dir() -> Path:
 
 
 def compiler_available() -> bool:
-    """True when a C compiler was found (``$CC``, ``gcc`` or ``cc``)."""
-    return _CC is not None
+    """True when a C compiler was found (``$CC``, ``gcc`` or ``cc``) and ``KILNCTL_NO_COMPILE`` is unset."""
+    return _CC is not None and not os.environ.get("KILNCTL_NO_COMPILE")
 
 
 def compile_sources(stem: str, sources: dict[str, bytes]) -> Path | None:
@@ -51,7 +51,7 @@ def compile_sources(stem: str, sources: dict[str, bytes]) -> Path | None:
     Path or None
         The library, or None without a compiler or when compiling fails.
     """
-    if _CC is None or os.environ.get("KILNCTL_NO_COMPILE"):
+    if not compiler_available():
         return None
     h = hashlib.sha256(b"|O2|")
     for name in sorted(sources):
