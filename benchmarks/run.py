@@ -72,9 +72,10 @@ def kilnctl_version() -> str:
     try:
         head = subprocess.run(["git", "-C", str(HERE.parent), "rev-parse", "--short", "HEAD"], capture_output=True,
                               text=True, timeout=10).stdout.strip()
-        dirty = subprocess.run(["git", "-C", str(HERE.parent), "status", "--porcelain", "--", "kilnctl"],
+        dirty = subprocess.run(["git", "-C", str(HERE.parent), "status", "--porcelain", "--", "kilnctl/simulate.py",
+                                "kilnctl/model", "kilnctl/response.py", "kilnctl/params.py"],
                                capture_output=True, text=True, timeout=10).stdout.strip()
-        return head + (" + uncommitted kilnctl/ changes" if dirty else "")
+        return head + (" + uncommitted simulator changes" if dirty else "")
     except (OSError, subprocess.SubprocessError):
         return "unknown"
 
@@ -345,7 +346,7 @@ def sweep_case(P, quick, log, ea_rtol=None, k_ea_rtol=None):
         log(f"  scipy sweep subset at rtol {rt:g}: mean {fmt_s(mean)}, max rel err {fmt_err(e)}")
         if e <= ACCURACY:
             break
-        rt /= 10
+        rt = float(f"{rt / 10:.0e}")
     if tried and tried[-1]["max_rel_err"] <= ACCURACY:
         ea = dict(tried[-1])
     else:
