@@ -97,7 +97,7 @@ def main(argv=None) -> PaperTable:
     tab.add(f"P(peak stress > allowable {allow / 1e6:.0f} MPa)", "no allowable given",
             f"{ex['probability']:.3f} ({ex['n_exceed']} of {ex['n']}), 95 % interval "
             f"{ex['ci_low']:.3f} to {ex['ci_high']:.3f}", "not in paper",
-            "Wilson interval; the Lewis stress has no AGMA factors, so this probability is a lower bound "
+            "Wilson interval; the Lewis stress has no AGMA factors, so this probability is likely too low "
             "(kilnctl.sweep.limits)")
     tab.add("what drives the peak stress (correlation)", "mass is critical (Fig. 14)",
             f"burden {corr['burden']:+.2f}, friction {corr['friction']:+.2f}",

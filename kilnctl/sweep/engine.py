@@ -188,25 +188,22 @@ class _Dask:
             self.client.close()
 
 
-def _backend(executor, workers, n_tasks):
+def _executor(executor, workers):
+    """Check the executor arguments; return a function that opens the backend for n tasks."""
     if executor is None or executor == "local":
         if workers is None:
             workers = os.cpu_count() or 1
         if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
             raise ParameterError(f"workers = {workers!r} must be an integer >= 1")
-        return _Local(min(workers, max(n_tasks, 1)))
+        return lambda n: _Local(min(workers, n))
     if workers is not None:
         raise ParameterError("workers= applies to the local executor only; a Dask cluster has its own workers")
     if executor == "serial":
-        return _Serial()
-    if isinstance(executor, str):
-        if executor.startswith(("dask://", "tcp://")):
-            return _Dask(executor)
-        raise ParameterError(f"executor = {executor!r}: use 'local', 'serial', 'dask://HOST:PORT' "
-                             "or a dask.distributed.Client")
-    if hasattr(executor, "submit") and hasattr(executor, "scheduler"):
-        return _Dask(executor)
-    raise ParameterError(f"executor {executor!r} is not 'local', 'serial', 'dask://HOST:PORT' or a "
+        return lambda n: _Serial()
+    if isinstance(executor, str) and executor.startswith(("dask://", "tcp://")) \
+            or not isinstance(executor, str) and hasattr(executor, "submit") and hasattr(executor, "scheduler"):
+        return lambda n: _Dask(executor)
+    raise ParameterError(f"executor = {executor!r}: use 'local', 'serial', 'dask://HOST:PORT' or a "
                          "dask.distributed.Client")
 
 
@@ -254,6 +251,7 @@ def run_sweep(study, executor=None, *, workers: int | None = None, cache=None, p
     from .result import SweepResult
 
     t0 = time.perf_counter()
+    open_backend = _executor(executor, workers)
     params = study.parameter_sets()
     tasks = [study.task(p) for p in params]
     store = PointCache(cache) if cache is not None else None
@@ -262,14 +260,14 @@ def run_sweep(study, executor=None, *, workers: int | None = None, cache=None, p
     if store is not None:
         for t in tasks:
             if t["key"] not in records:
-                rec = store.get(t["key"])
-                if rec is not None and all(k in rec["custom"] for k in study.custom_outputs):
+                rec = store.get(t["key"])  # the key covers the custom outputs' names
+                if rec is not None:
                     records[t["key"]] = rec
                     from_cache.add(t["key"])
     todo = list({t["key"]: t for t in tasks if t["key"] not in records}.values())
     label = "none (all points cached)"
     if todo:
-        backend = _backend(executor, workers, len(todo))
+        backend = open_backend(len(todo))
         label = backend.label
         futures = {}
         try:
