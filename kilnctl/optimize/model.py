@@ -1,0 +1,257 @@
+"""The smooth start-up model the optimizer works on, built from the plant's components.
+
+:class:`SmoothStartup` assembles the micro model with the smoothed twins of
+the non-smooth components (``mesh_smooth``, ``burden_smooth``, see
+:mod:`kilnctl.model.smooth`) and the profile's reference component, without
+the drive limits (they become constraints), and compiles from
+:meth:`kilnctl.model.Plant.equations` the right-hand side and the outputs the
+problem needs.  Nothing of the drive train is written again here: the
+equations are the components'.
+
+The decision variables and the smoothing widths are constant states of the
+ramp and smooth components, so they enter through the initial state; CVODES
+forward sensitivities with respect to the initial state give the gradients.
+
+Outputs (rows of :meth:`SmoothStartup.outputs`): ``sigma`` [Pa], ``sigma_dyn``
+[Pa] (:func:`load_stress` removed), ``i_a`` [A], ``e_a`` [V], ``speed_rpm``.
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+
+from ..errors import ModelError
+from ..model.assembly import Plant
+from ..model.base import OPTION_NAMES
+from ..model.kiln import BEARING_OMEGA_EPS
+from ..model.smooth import SMOOTH_DS, SMOOTH_V
+from ..params import Parameters
+from .problem import Profile
+
+__all__ = ["SmoothStartup", "load_stress", "OUTPUTS", "smooth_components", "hybrid_components"]
+
+#: output rows of the smooth model
+OUTPUTS = ("sigma", "sigma_dyn", "i_a", "e_a", "speed_rpm")
+
+#: the micro model's components that are smooth already, in phase order (limits left out)
+_SMOOTH_CORE = ("pid", "dc_motor", "coupling", "pinion", "mesh_smooth", "kiln", "bearing_friction",
+                "burden_smooth", "bending_stress")
+#: the paper's micro model (hybrid), from kilnctl.model.MODELS['micro']
+_HYBRID_CORE = ("pid", "voltage_limit", "dc_motor", "current_limit", "coupling", "pinion", "mesh", "kiln",
+                "bearing_friction", "burden", "bending_stress")
+
+
+def smooth_components(profile: Profile) -> tuple[str, ...]:
+    """Component list of the smooth optimization model for a profile family.
+
+    Parameters
+    ----------
+    profile : Profile
+
+    Returns
+    -------
+    tuple of str
+        ``ramp``, the profile's smooth reference component, then the smooth
+        micro model without the drive limits.
+    """
+    return ("ramp", profile.smooth_component) + _SMOOTH_CORE
+
+
+def hybrid_components(profile: Profile) -> tuple[str, ...]:
+    """Component list of the exact hybrid micro model driven by a profile.
+
+    Parameters
+    ----------
+    profile : Profile
+
+    Returns
+    -------
+    tuple of str
+        The paper's micro model; for a shaped profile its exact reference
+        component follows ``ramp``.
+    """
+    extra = (profile.exact_component,) if profile.exact_component else ()
+    return ("ramp",) + extra + _HYBRID_CORE
+
+
+def load_stress(T_f, omega_kiln, p, tanh=np.tanh, fabs=np.abs):
+    """Bending stress of the loads any ramp must carry: burden and bearing friction [Pa].
+
+    The kiln shell obeys J_kiln*alpha = W*R_o - T_f - T_brg*tanh(omega/eps)
+    in every mode of the burden (``T_f`` is the torque the burden takes from
+    the wall), so sigma - load_stress = J_kiln*alpha*K_v/(R_o*b*m*Y): the
+    stress spent accelerating the shell, which is what a ramp changes.
+
+    Parameters
+    ----------
+    T_f : array or casadi.SX
+        Wall torque on the burden [N*m] (output ``T_f``).
+    omega_kiln : array or casadi.SX
+        Kiln speed [rad/s].
+    p : Parameters or SymParams
+        Parameters (numeric or symbolic).
+    tanh, fabs : callable
+        ``numpy`` or ``casadi`` functions, matching the arguments.
+
+    Returns
+    -------
+    array or casadi.SX
+        Load stress [Pa].
+    """
+    Kv = 1.0
+    if p.dynamic_factor == "barth":
+        Kv = (6.1 + p.R_o * fabs(omega_kiln)) / 6.1
+    T_load = T_f + p.T_brg * tanh(omega_kiln / BEARING_OMEGA_EPS)
+    return T_load / p.R_o * Kv / (p.face_width * p.module * p.Y_lewis)
+
+
+class SmoothStartup:
+    """Smooth micro model of the start-up for one profile family and option set.
+
+    Parameters
+    ----------
+    profile : Profile
+        Reference profile family.
+    params : Parameters
+        Only the string options are used (they select the structure).
+    rtol, atol : float
+        CVODES tolerances (atol on states scaled to order one).
+
+    Attributes
+    ----------
+    plant : Plant
+        The assembled smooth plant.
+    rhs : casadi.Function
+        (xs, t, P) -> dxs/dt, scaled states.
+    outputs : casadi.Function
+        (xs, t, P) -> the :data:`OUTPUTS` rows.
+    """
+
+    def __init__(self, profile: Profile, params: Parameters, rtol: float = 1e-8, atol: float = 1e-8):
+        self.profile = profile
+        self.options = {k: params[k] for k in OPTION_NAMES}
+        self.plant = Plant(smooth_components(profile), self.options, compile=False)
+        if [c.name for c in self.plant.moded] != ["ramp"]:
+            raise ModelError("the smooth start-up model must have no modes besides the ramp's")
+        e, xs, t, sp = self.plant.equations(("rising",))  # the ramp's mode is overridden by the profile
+        names = self.plant.state_names
+        f = ca.vertcat(*[e.rates[n] / self.plant.scales[i] for i, n in enumerate(names)])
+        o = e.outputs
+        sig_dyn = o["sigma"] - load_stress(o["T_f"], e.x["omega_kiln"], sp, ca.tanh, ca.fabs)
+        y = ca.vertcat(o["sigma"], sig_dyn, o["i_a"], o["e_a"], o["speed_rpm"])
+        self.xs, self.t, self.P = xs, t, sp.vector
+        self.f_expr, self.y_expr = f, y
+        self.rhs = ca.Function("rhs", [xs, t, sp.vector], [f], ["xs", "t", "P"], ["f"])
+        self.outputs = ca.Function("outputs", [xs, t, sp.vector], [y], ["xs", "t", "P"], ["y"])
+        self.rtol, self.atol = float(rtol), float(atol)
+        self.index = {n: i for i, n in enumerate(names)}
+        self.theta_index = [self.index[n] for n in profile.names]
+        self._integrators: dict = {}
+        self._maps: dict = {}
+
+    @property
+    def width_names(self) -> tuple[str, ...]:
+        """Smoothing widths of this model (constant states)."""
+        return tuple(n for n in ("smooth_ds", "smooth_v", "ramp_corner") if n in self.index)
+
+    def param_vector(self, params: Parameters) -> np.ndarray:
+        """Numeric parameter vector P (gains must be resolved)."""
+        if params.gains != "given":
+            raise ModelError("resolve the PID gains first (kilnctl.simulate.resolve_gains)")
+        return self.plant.param_vector(params)
+
+    def x0(self, params: Parameters, theta, widths: dict):
+        """Scaled initial state with the profile's numbers and the smoothing widths.
+
+        Parameters
+        ----------
+        params : Parameters
+            Parameter set (initial backlash position, burden angle).
+        theta : array or casadi.MX
+            Profile numbers in physical units (:attr:`Profile.names` order).
+        widths : dict
+            ``smooth_ds`` [m], ``smooth_v`` [rad/s], ``ramp_corner`` [s]
+            (those the model has).
+
+        Returns
+        -------
+        casadi.DM or casadi.MX
+        """
+        xs0, _ = self.plant.initial(params)
+        given = {self.index[n]: v for n, v in widths.items() if n in self.index}
+        given.update({i: theta[k] for k, i in enumerate(self.theta_index)})
+        parts = [given[i] / self.plant.scales[i] if i in given else float(xs0[i]) for i in range(len(xs0))]
+        return ca.vertcat(*parts)
+
+    def integrator(self, t0: float, grid, quad=None) -> ca.Function:
+        """CVODES integrator from t0 returning the scaled states at each time of ``grid`` (cached).
+
+        Parameters
+        ----------
+        t0 : float
+            Start time [s].
+        grid : sequence of float
+            Output times [s], increasing, > t0.
+        quad : tuple (name, casadi.SX q, casadi.SX pq), optional
+            Quadrature integrands ``q`` (functions of :attr:`xs`, :attr:`t`,
+            :attr:`P` and extra parameters ``pq``), integrated with error
+            control; ``name`` keys the cache.
+
+        Returns
+        -------
+        casadi.Function
+            ``x0``, ``p`` (= P, or [P; pq] with quadratures) -> ``xf``
+            (nx x len(grid)) and ``qf`` (cumulative quadratures at the grid).
+        """
+        key = (float(t0), tuple(np.round(np.asarray(grid, dtype=float), 12)), None if quad is None else quad[0])
+        F = self._integrators.get(key)
+        if F is None:
+            dae = {"x": self.xs, "t": self.t, "p": self.P, "ode": self.f_expr}
+            opts = {"abstol": self.atol, "reltol": self.rtol, "max_num_steps": 500000, "fsens_err_con": True}
+            if quad is not None:
+                dae["p"] = ca.vertcat(self.P, quad[2])
+                dae["quad"] = quad[1]
+                opts["quad_err_con"] = True
+            F = ca.integrator(f"F{len(self._integrators)}", "cvodes", dae, float(t0), [float(g) for g in grid], opts)
+            self._integrators[key] = F
+        return F
+
+    def output_map(self, n: int) -> ca.Function:
+        """The outputs mapped over ``n`` grid points: (XS, T, P) -> Y (5 x n) (cached)."""
+        m = self._maps.get(n)
+        if m is None:
+            m = self._maps[n] = self.outputs.map(n)
+        return m
+
+    def run(self, params: Parameters, theta, widths: dict, grid) -> dict:
+        """Simulate the smooth model numerically and return the outputs on ``grid``.
+
+        Parameters
+        ----------
+        params : Parameters
+            Gains resolved.
+        theta : sequence of float
+            Profile numbers [units of the profile].
+        widths : dict
+            Smoothing widths.
+        grid : ndarray
+            Output times [s], > 0.
+
+        Returns
+        -------
+        dict
+            ``t`` and one array per name of :data:`OUTPUTS`.
+        """
+        grid = np.asarray(grid, dtype=float)
+        P = self.param_vector(params)
+        F = self.integrator(0.0, grid)
+        X = F(x0=self.x0(params, np.asarray(theta, dtype=float), widths), p=P)["xf"]
+        Y = np.asarray(self.output_map(len(grid))(X, grid, P))
+        out = {"t": grid}
+        out.update({n: Y[i] for i, n in enumerate(OUTPUTS)})
+        return out
+
+
+#: default smoothing widths of the final (sharpest) stage
+DEFAULT_WIDTHS = {"smooth_ds": SMOOTH_DS, "smooth_v": SMOOTH_V, "ramp_corner": 0.05}

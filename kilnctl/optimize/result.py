@@ -1,0 +1,294 @@
+"""Result of a ramp optimization: numbers, the comparison with the baseline, plots."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .problem import RampProblem
+from .verify import StartupMeasures
+
+__all__ = ["RampResult", "StageLog"]
+
+
+@dataclass
+class StageLog:
+    """One continuation stage of the solve.
+
+    Attributes
+    ----------
+    widths : dict
+        Smoothing widths (``smooth_ds`` [m], ``smooth_v`` [rad/s], ``ramp_corner`` [s]).
+    beta : float
+        Smooth-maximum sharpness [1/stress scale].
+    status : str
+        IPOPT return status.
+    iterations : int
+        IPOPT iterations.
+    objective : float
+        Smooth objective at the stage's solution [stress scale].
+    theta : list of float
+        Profile numbers at the stage's solution.
+    seconds : float
+        Wall time of the stage [s].
+    """
+
+    widths: dict
+    beta: float
+    status: str
+    iterations: int
+    objective: float
+    theta: list
+    seconds: float
+
+
+def _worst(measures: dict, kind: str) -> tuple[str, StartupMeasures]:
+    name = max(measures, key=lambda k: measures[k].objective(kind))
+    return name, measures[name]
+
+
+@dataclass
+class RampResult:
+    """An optimized start-up ramp, predicted on the smooth model and verified on the hybrid plant.
+
+    Attributes
+    ----------
+    problem : RampProblem
+        The problem solved.
+    values : ndarray
+        Optimal profile numbers (units of ``problem.profile.units``).
+    predicted : dict of str to StartupMeasures
+        Smooth-model measures per case.
+    verified : dict of str to StartupMeasures
+        Hybrid-plant measures per case (empty when not verified).
+    baseline : dict of str to StartupMeasures
+        Hybrid-plant measures of the paper's constant ramp ``params.ramp_rate``.
+    solver_status : str
+        IPOPT status of the last stage.
+    iterations : int
+        IPOPT iterations over all stages.
+    stages : list of StageLog
+        The continuation.
+    transcription : str
+        ``single_shooting`` or ``multiple_shooting``.
+    solve_seconds, verify_seconds : float
+        Wall times [s].
+    tolerance : float
+        Relative disagreement between prediction and verification above which
+        the result is flagged [-].
+    flags : list of str
+        Everything the verification found wrong (empty when all is well).
+    notes : list of str
+        Facts worth knowing that are not errors (the peak is the running
+        load; the baseline misses t_max ...).
+    traces : dict
+        Time series for plotting: ``smooth`` (dict of arrays), ``hybrid`` and
+        ``baseline`` (Responses) of the worst verified case.
+    """
+
+    problem: RampProblem
+    values: np.ndarray
+    predicted: dict
+    verified: dict
+    baseline: dict
+    solver_status: str
+    iterations: int
+    stages: list
+    transcription: str
+    solve_seconds: float
+    verify_seconds: float
+    tolerance: float
+    flags: list = field(default_factory=list)
+    notes: list = field(default_factory=list)
+    traces: dict = field(default_factory=dict, repr=False)
+
+    # --- the headline numbers ---------------------------------------------------
+    @property
+    def objective_kind(self) -> str:
+        """``'peak'`` or ``'dynamic'``."""
+        return self.problem.objective
+
+    @property
+    def worst_predicted(self) -> tuple[str, StartupMeasures]:
+        """(case, measures) of the case with the highest predicted objective."""
+        return _worst(self.predicted, self.objective_kind)
+
+    @property
+    def worst_verified(self) -> tuple[str, StartupMeasures] | None:
+        """(case, measures) of the case with the highest verified objective, or None."""
+        return _worst(self.verified, self.objective_kind) if self.verified else None
+
+    @property
+    def worst_baseline(self) -> tuple[str, StartupMeasures] | None:
+        """(case, measures) of the baseline's worst case, or None."""
+        return _worst(self.baseline, self.objective_kind) if self.baseline else None
+
+    @property
+    def agreement(self) -> float | None:
+        """Relative difference (predicted - verified)/verified of the worst-case objective [-]."""
+        if not self.verified:
+            return None
+        p = self.worst_predicted[1].objective(self.objective_kind)
+        v = self.worst_verified[1].objective(self.objective_kind)
+        return (p - v) / v
+
+    @property
+    def ok(self) -> bool:
+        """True when verified and nothing was flagged."""
+        return bool(self.verified) and not self.flags
+
+    def summary(self) -> dict:
+        """JSON-ready summary (the keys of ``kilnctl optimize-ramp --json``).
+
+        Returns
+        -------
+        dict
+            ``profile``, ``ramp`` (the profile's numbers), ``objective``,
+            ``peak_stress_predicted_Pa``, ``peak_stress_verified_Pa``,
+            ``baseline_ramp`` [rpm/s], ``baseline_peak_stress_Pa``,
+            ``reduction_pct`` (of the peak stress against the baseline),
+            ``time_to_speed_s``, ``solver_status``, ``iterations``, and the
+            dynamic stresses, running load, agreement, flags, timings and the
+            per-case table.
+        """
+        prob = self.problem
+        kind = self.objective_kind
+        _, wp = self.worst_predicted
+        wv = self.worst_verified
+        wb = self.worst_baseline
+
+        def peak(m, k="peak"):
+            return None if m is None else m[1].objective(k)
+
+        out = {
+            "profile": prob.profile.label,
+            "ramp": prob.profile.describe(self.values, prob.params.omega_ref),
+            "objective": kind,
+            "t_max_s": prob.t_max,
+            "horizon_s": prob.horizon,
+            "robust": prob.robust,
+            "peak_stress_predicted_Pa": max(m.peak_stress_Pa for m in self.predicted.values()),
+            "peak_stress_verified_Pa": None if wv is None else max(m.peak_stress_Pa for m in self.verified.values()),
+            "dynamic_stress_predicted_Pa": max(m.peak_dynamic_stress_Pa for m in self.predicted.values()),
+            "dynamic_stress_verified_Pa": None if wv is None else
+            max(m.peak_dynamic_stress_Pa for m in self.verified.values()),
+            "running_stress_Pa": None if wv is None else wv[1].running_stress_Pa,
+            "baseline_ramp": prob.params.ramp_rate,
+            "baseline_peak_stress_Pa": None if wb is None else max(m.peak_stress_Pa for m in self.baseline.values()),
+            "baseline_dynamic_stress_Pa": None if wb is None else
+            max(m.peak_dynamic_stress_Pa for m in self.baseline.values()),
+            "reduction_pct": None,
+            "objective_reduction_pct": None,
+            "time_to_speed_s": None if wv is None else
+            max((m.time_to_speed_s if m.time_to_speed_s is not None else float("inf"))
+                for m in self.verified.values()),
+            "agreement_pct": None if self.agreement is None else 100.0 * self.agreement,
+            "tolerance_pct": 100.0 * self.tolerance,
+            "solver_status": self.solver_status,
+            "iterations": self.iterations,
+            "transcription": self.transcription,
+            "solve_time_s": self.solve_seconds,
+            "verify_time_s": self.verify_seconds,
+            "flags": list(self.flags),
+            "notes": list(self.notes),
+            "cases": {name: {"predicted": self.predicted[name].as_dict(),
+                             "verified": self.verified[name].as_dict() if name in self.verified else None,
+                             "baseline": self.baseline[name].as_dict() if name in self.baseline else None}
+                      for name in self.predicted},
+        }
+        if wv is not None and wb is not None:
+            out["reduction_pct"] = 100.0 * (1 - out["peak_stress_verified_Pa"] / out["baseline_peak_stress_Pa"])
+            out["objective_reduction_pct"] = 100.0 * (1 - peak(wv, kind) / peak(wb, kind))
+        if out["time_to_speed_s"] == float("inf"):
+            out["time_to_speed_s"] = None
+        return out
+
+    def table(self) -> str:
+        """Plain-text report: predicted and verified side by side, against the baseline."""
+        s = self.summary()
+        prob = self.problem
+        mpa = lambda v: "-" if v is None else f"{v / 1e6:8.2f}"  # noqa: E731
+        lines = [f"start-up ramp, profile {s['profile']}, objective '{s['objective']}', "
+                 f"95 % speed by t_max = {prob.t_max:g} s ({'robust, ' + str(len(self.predicted)) + ' cases' if prob.robust else 'nominal'})",
+                 f"  ramp: {_ramp_text(s['ramp'])}",
+                 f"  {'':34s}{'predicted':>10s}{'verified':>10s}{'baseline':>10s}",
+                 f"  {'peak bending stress [MPa]':34s}{mpa(s['peak_stress_predicted_Pa']):>10s}"
+                 f"{mpa(s['peak_stress_verified_Pa']):>10s}{mpa(s['baseline_peak_stress_Pa']):>10s}",
+                 f"  {'peak dynamic stress [MPa]':34s}{mpa(s['dynamic_stress_predicted_Pa']):>10s}"
+                 f"{mpa(s['dynamic_stress_verified_Pa']):>10s}{mpa(s['baseline_dynamic_stress_Pa']):>10s}"]
+        if s["reduction_pct"] is not None:
+            lines.append(f"  peak stress {s['reduction_pct']:+.1f} % below the baseline ramp {s['baseline_ramp']:g} rpm/s"
+                         .replace("+-", "-"))
+        if s["running_stress_Pa"] is not None:
+            lines.append(f"  running load (burden at its angle): {s['running_stress_Pa'] / 1e6:.2f} MPa")
+        tts = s["time_to_speed_s"]
+        lines.append(f"  time to 95 % speed: {'not reached' if tts is None else f'{tts:.2f} s'}")
+        if s["agreement_pct"] is not None:
+            lines.append(f"  predicted vs verified: {s['agreement_pct']:+.2f} % (tolerance {s['tolerance_pct']:g} %)")
+        lines.append(f"  IPOPT: {s['solver_status']}, {s['iterations']} iterations, {s['solve_time_s']:.1f} s "
+                     f"({s['transcription']}); verification {s['verify_time_s']:.1f} s")
+        for f in self.flags:
+            lines.append(f"  FLAG: {f}")
+        for n in self.notes:
+            lines.append(f"  note: {n}")
+        return "\n".join(lines)
+
+    def plot(self, fig=None):
+        """Draw reference, bending stress and current: optimum against the baseline.
+
+        Parameters
+        ----------
+        fig : matplotlib.figure.Figure, optional
+            Figure to draw into (a new one by default).
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+        """
+        import matplotlib.pyplot as plt
+
+        if fig is None:
+            fig = plt.figure(figsize=(10, 8))
+        ax = fig.subplots(3, 1, sharex=True)
+        hyb, base, sm = self.traces.get("hybrid"), self.traces.get("baseline"), self.traces.get("smooth")
+        rate = self.problem.params.ramp_rate
+        if base is not None:
+            ax[0].plot(base.t, base.outputs["speed_ref_rpm"], "k--", lw=1, label=f"baseline reference ({rate:g} rpm/s)")
+            ax[1].plot(base.t, base.outputs["sigma"] / 1e6, color="0.55", lw=1, label="baseline, hybrid plant")
+            ax[2].plot(base.t, base.outputs["i_a"], color="0.55", lw=1, label="baseline")
+        if hyb is not None:
+            ax[0].plot(hyb.t, hyb.outputs["speed_ref_rpm"], color="C0", label="optimized reference")
+            ax[0].plot(hyb.t, hyb.outputs["speed_rpm"], color="C1", lw=1, label="motor speed (optimized)")
+            ax[1].plot(hyb.t, hyb.outputs["sigma"] / 1e6, color="C3", lw=1.2, label="optimized, hybrid plant")
+            ax[2].plot(hyb.t, hyb.outputs["i_a"], color="C3", lw=1.2, label="optimized")
+        if sm is not None:
+            ax[1].plot(sm["t"], sm["sigma"] / 1e6, color="C0", ls=":", lw=1.2, label="optimized, smooth model")
+        ax[0].axvline(self.problem.t_max, color="k", lw=0.8, ls=":")
+        ax[0].axhline(self.problem.speed_fraction * self.problem.params.omega_ref, color="k", lw=0.5, ls=":")
+        ax[0].set_ylabel("speed [rpm]")
+        ax[1].set_ylabel("tooth bending stress [MPa]")
+        ax[2].axhline(self.problem.params.I_max, color="k", lw=0.8, ls="--")
+        ax[2].set_ylabel("armature current [A]")
+        ax[2].set_xlabel("time [s]")
+        for a in ax:
+            a.grid(True, alpha=0.3)
+            a.legend(loc="lower right", fontsize=8)
+        s = self.summary()
+        ttl = f"profile {s['profile']}: peak stress {s['peak_stress_verified_Pa'] / 1e6:.1f} MPa verified" \
+            if s["peak_stress_verified_Pa"] is not None else f"profile {s['profile']}"
+        if s["baseline_peak_stress_Pa"] is not None:
+            ttl += f" vs {s['baseline_peak_stress_Pa'] / 1e6:.1f} MPa at {rate:g} rpm/s"
+        fig.suptitle(ttl)
+        fig.tight_layout()
+        return fig
+
+
+def _ramp_text(d: dict) -> str:
+    if "rate_rpm_s" in d:
+        return f"{d['rate_rpm_s']:.2f} rpm/s (reference at speed after {d['end_time_s']:.2f} s)"
+    if "jerk_rpm_s2" in d:
+        return (f"S-curve, acceleration {d['accel_rpm_s']:.2f} rpm/s (reached {d['accel_reached_rpm_s']:.2f}), "
+                f"jerk {d['jerk_rpm_s2']:.2f} rpm/s^2, at speed after {d['end_time_s']:.2f} s")
+    rates = ", ".join(f"{r:.1f}" for r in d["rates_rpm_s"])
+    return f"piecewise-linear rates [{rates}] rpm/s, at speed after {d['end_time_s']:.2f} s"
