@@ -584,6 +584,12 @@ class ControlSmooth:
         Velocity over which static friction falls to kinetic [rad/s].
     x_eps : float, default 1e-6
         Softplus width of the backlash dead zone [m].
+    w_eps : float, default 1e3
+        Softplus width of the clip that keeps the mesh force from pulling [N].
+    v_clip_eps : float, default 0.5
+        Softplus width of the voltage clamp [V] (and of the current-limit release [V]).
+    i_clip_eps : float, default 1.0
+        Softplus width of the current clamp [A].
     """
 
     def __init__(self, params, model: str = "macro", v_eps: float = 1e-5, v_stribeck: float = 1e-3,
