@@ -127,6 +127,8 @@ class _Engine:
 
     # --- guards -------------------------------------------------------------------
     def guards(self, mf, xs, t):
+        if mf.stepper is not None:
+            return mf.stepper.guard(self.P, xs, t)
         g, sel, gdot = mf.guard(xs, t, self.P)
         return np.asarray(g).ravel(), np.asarray(sel).ravel(), np.asarray(gdot).ravel()
 
@@ -185,7 +187,7 @@ class _Engine:
             visited.append(new)
             mode = new
             mf = plant.functions(mode)
-            xs = np.asarray(mf.project(xs, self.P)).ravel()
+            xs = mf.stepper.project(self.P, xs) if mf.stepper is not None else np.asarray(mf.project(xs, self.P)).ravel()
             j = self.violated(mf, xs, t)
         raise EventStormError(f"more than 32 mode switches at t = {t:.6g} s without time passing "
                               f"(last: {switched[-1][1]} -> {switched[-1][2]})")
@@ -250,9 +252,11 @@ class _Engine:
             mf = plant.functions(mode)
             if mf.stepper is None:
                 raise SimulationError("method 'ros3p' needs a C compiler (gcc or $CC); use method='cvodes'")
-            r = mf.stepper.run(self.P, t, t_end, xs, dt, rtol, atol, hmax, h, self.event_tol, max_out=16384)
+            r = mf.stepper.run(self.P, t, t_end, xs, dt, rtol, atol, hmax, h, self.event_tol, max_out=16384,
+                               runaway=RUNAWAY)
             st = r["status"]
-            self.check_bounded(r["x"], r["x_ev"], t, mode)
+            if st == -6:
+                self.check_bounded(np.zeros((len(xs), 0)), r["x_ev"], r["t_ev"], mode)
             self.record(mf, r["t"], r["x"])
             self.n_steps += r["n_steps"]
             if st < 0:

@@ -341,7 +341,7 @@ class Plant:
                             for i, nm in enumerate(self.state_names)])
         project = ca.Function("project", [xs, P], [proj])
         n = self.n_grid
-        stepper = build_stepper(f, xs, t, P, g, y) if self.compile else None
+        stepper = build_stepper(f, xs, t, P, g, y, sel, gdot, proj) if self.compile else None
         if stepper is not None:
             self.compiled = True
         guard_g = ca.Function("guard_g", [xs, t, P], [g])

@@ -17,6 +17,7 @@ import os
 import shutil
 import subprocess
 import tempfile
+import warnings
 from pathlib import Path
 
 import casadi as ca
@@ -69,8 +70,12 @@ def compile_sources(stem: str, sources: dict[str, bytes]) -> Path | None:
                 p.write_bytes(text)
                 paths.append(str(p))
             tmp_lib = Path(tmp) / "lib.so"
-            subprocess.run([_CC, "-O2", "-fPIC", "-shared", *paths, "-o", str(tmp_lib), "-lm"],
-                           check=True, capture_output=True, timeout=300)
+            proc = subprocess.run([_CC, "-O2", "-fPIC", "-shared", *paths, "-o", str(tmp_lib), "-lm"],
+                                  capture_output=True, timeout=300)
+            if proc.returncode != 0:
+                warnings.warn(f"kilnctl: compiling {stem} failed, falling back to the slower uncompiled path: "
+                              + proc.stderr.decode(errors="replace")[:800], RuntimeWarning, stacklevel=2)
+                return None
             fd, staged = tempfile.mkstemp(dir=folder, suffix=".so.tmp")
             os.close(fd)
             shutil.copyfile(tmp_lib, staged)

@@ -9,6 +9,8 @@
  *   kt (xs, t, P) -> df/dt
  *   kg (xs, t, P) -> g      guards (mode valid while g > 0)
  *   ko (xs, t, P) -> y      output signals
+ *   kd (xs, t, P) -> (g, selector, dg/dt)   guards at an event, for the mode cascade
+ *   kp (xs, P) -> xs        speeds projected onto the mode's rigid links
  *
  * ROS3P: J. Lang and J. Verwer, BIT 41 (2001) 731-738, order 3, A-stable,
  * embedded order 2.  Coefficients in the transformed form of Hairer & Wanner.
@@ -28,6 +30,10 @@ int kg(const double** arg, double** res, cint* iw, double* w, int mem);
 int kg_work(cint* sz_arg, cint* sz_res, cint* sz_iw, cint* sz_w);
 int ko(const double** arg, double** res, cint* iw, double* w, int mem);
 int ko_work(cint* sz_arg, cint* sz_res, cint* sz_iw, cint* sz_w);
+int kd(const double** arg, double** res, cint* iw, double* w, int mem);
+int kd_work(cint* sz_arg, cint* sz_res, cint* sz_iw, cint* sz_w);
+int kp(const double** arg, double** res, cint* iw, double* w, int mem);
+int kp_work(cint* sz_arg, cint* sz_res, cint* sz_iw, cint* sz_w);
 
 #define NMAX 64
 #define GMAX 64
@@ -119,12 +125,13 @@ static int ros_step(ctx_t* c, int n, double t, const double* x, const double* f0
  * Samples at k*dt_out > t0 (the global grid) are written to out_t/out_x (row per sample).
  * Returns 0 at t_end, 1 at an event (t_ev, x_ev, j_ev), 2 when the output buffer is full
  * (t_ev, x_ev hold the restart point), -1 singular matrix, -2 function error,
- * -3 step size underflow, -4 too many steps, -5 too many states.
+ * -3 step size underflow, -4 too many steps, -5 too many states, -6 a state beyond +-runaway
+ * (j_ev names it).
  */
 int kiln_run(int n, int ng, const double* P, double t0, double t_end, const double* x0, double dt_out,
              double rtol, double atol, double hmax, double h0, double event_tol, int max_out, double* out_t,
              double* out_x, int* n_out, double* t_ev, double* x_ev, int* j_ev, int max_steps, int* n_steps,
-             double* h_last) {
+             double* h_last, double runaway) {
     if (n > NMAX || ng > GMAX) return -5;
     ctx_t* c = (ctx_t*)malloc(sizeof(ctx_t));
     c->P = P;
@@ -231,7 +238,13 @@ int kiln_run(int n, int ng, const double* P, double t0, double t_end, const doub
         }
         t = t1;
         memcpy(x, x1, n * sizeof(double)); memcpy(f0, f1, n * sizeof(double)); memcpy(g0, g1, ng * sizeof(double));
-        if (!(x[0] == x[0])) { status = -2; break; }
+        for (int i = 0; i < n; i++) {
+            if (!(fabs(x[i]) <= runaway)) {  /* also catches NaN */
+                status = (x[i] == x[i]) ? -6 : -2; j_ev[0] = i; t_ev[0] = t; memcpy(x_ev, x, n * sizeof(double));
+                break;
+            }
+        }
+        if (status) break;
     }
     if (status == 0) { t_ev[0] = t; memcpy(x_ev, x, n * sizeof(double)); }
 done:
@@ -244,8 +257,8 @@ done:
 
 /* 0 when the generated functions fit the fixed work arrays of ctx_t. */
 int kiln_check(void) {
-    int (*works[5])(cint*, cint*, cint*, cint*) = {kf_work, kj_work, kt_work, kg_work, ko_work};
-    for (int k = 0; k < 5; k++) {
+    int (*works[7])(cint*, cint*, cint*, cint*) = {kf_work, kj_work, kt_work, kg_work, ko_work, kd_work, kp_work};
+    for (int k = 0; k < 7; k++) {
         cint a, r, iw, w;
         if (works[k](&a, &r, &iw, &w)) return -1;
         if (a > 64 || r > 64 || iw > 4096 || w > 65536) return 1;
@@ -262,4 +275,25 @@ int kiln_outputs(int n, int ny, const double* P, int k, const double* T, const d
         if (call3(ko, c, X + (size_t)i * n, T[i], Y + (size_t)i * ny)) { status = -2; break; }
     free(c);
     return status;
+}
+
+/* Guards g, selectors and dg/dt at one point (the simulator's mode cascade). */
+int kiln_guard(const double* P, const double* x, double t, double* g, double* sel, double* gdot) {
+    ctx_t* c = (ctx_t*)malloc(sizeof(ctx_t));
+    c->P = P;
+    c->arg[0] = x; c->arg[1] = &t; c->arg[2] = P;
+    c->res[0] = g; c->res[1] = sel; c->res[2] = gdot;
+    int st = kd(c->arg, c->res, c->iw, c->w, 0);
+    free(c);
+    return st;
+}
+
+/* Node speeds projected onto the mode's rigid links (momentum kept). */
+int kiln_project(const double* P, const double* x, double* out) {
+    ctx_t* c = (ctx_t*)malloc(sizeof(ctx_t));
+    c->arg[0] = x; c->arg[1] = P;
+    c->res[0] = out;
+    int st = kp(c->arg, c->res, c->iw, c->w, 0);
+    free(c);
+    return st;
 }

@@ -24,7 +24,7 @@ __all__ = ["Stepper", "build_stepper", "STATUS"]
 #: meaning of kiln_run's return codes
 STATUS = {0: "reached t_end", 1: "event", 2: "output buffer full", -1: "singular iteration matrix",
           -2: "model function error or non-finite state", -3: "step size underflow", -4: "too many steps",
-          -5: "too many states or guards for the compiled stepper"}
+          -5: "too many states or guards for the compiled stepper", -6: "a state ran away"}
 
 _D = ctypes.POINTER(ctypes.c_double)
 _I = ctypes.POINTER(ctypes.c_int)
@@ -59,7 +59,26 @@ class Stepper:
             raise RuntimeError(f"compiled output evaluation failed ({STATUS.get(st, st)})")
         return Y.T
 
-    def run(self, P, t0, t_end, x0, dt_out, rtol, atol, hmax, h0, event_tol, max_out=4096, max_steps=500000):
+    def guard(self, P, x, t):
+        """Guards, selectors and their time derivatives at (x, t): three arrays of length ng."""
+        P, x = np.ascontiguousarray(P, dtype=float), np.ascontiguousarray(x, dtype=float)
+        m = max(self.ng, 1)
+        g, sel, gd = np.empty(m), np.empty(m), np.empty(m)
+        if self.lib.kiln_guard(P.ctypes.data_as(_D), x.ctypes.data_as(_D), ctypes.c_double(t), g.ctypes.data_as(_D),
+                               sel.ctypes.data_as(_D), gd.ctypes.data_as(_D)):
+            raise RuntimeError("compiled guard evaluation failed")
+        return g[: self.ng], sel[: self.ng], gd[: self.ng]
+
+    def project(self, P, x):
+        """Scaled state with node speeds projected onto the mode's rigid links."""
+        P, x = np.ascontiguousarray(P, dtype=float), np.ascontiguousarray(x, dtype=float)
+        out = np.empty(self.n)
+        if self.lib.kiln_project(P.ctypes.data_as(_D), x.ctypes.data_as(_D), out.ctypes.data_as(_D)):
+            raise RuntimeError("compiled projection failed")
+        return out
+
+    def run(self, P, t0, t_end, x0, dt_out, rtol, atol, hmax, h0, event_tol, max_out=4096, max_steps=500000,
+            runaway=1e6):
         """Integrate from (t0, x0) to t_end or the first guard crossing.
 
         Returns
@@ -84,13 +103,15 @@ class Stepper:
             x0.ctypes.data_as(_D), ctypes.c_double(dt_out), ctypes.c_double(rtol), ctypes.c_double(atol),
             ctypes.c_double(hmax), ctypes.c_double(h0), ctypes.c_double(event_tol), max_out,
             out_t.ctypes.data_as(_D), out_x.ctypes.data_as(_D), ctypes.byref(n_out), t_ev.ctypes.data_as(_D),
-            x_ev.ctypes.data_as(_D), ctypes.byref(j_ev), max_steps, ctypes.byref(n_steps), ctypes.byref(h_last))
+            x_ev.ctypes.data_as(_D), ctypes.byref(j_ev), max_steps, ctypes.byref(n_steps), ctypes.byref(h_last),
+            ctypes.c_double(runaway))
         k = n_out.value
-        return {"status": st, "t": out_t[:k], "x": out_x[:k].T, "t_ev": float(t_ev[0]), "x_ev": x_ev,
+        # copies of the used rows, so the full buffers are freed now
+        return {"status": st, "t": out_t[:k].copy(), "x": out_x[:k].T.copy(), "t_ev": float(t_ev[0]), "x_ev": x_ev,
                 "j_ev": j_ev.value, "n_steps": n_steps.value, "h": h_last.value}
 
 
-def build_stepper(f, xs, t, P, g, y) -> Stepper | None:
+def build_stepper(f, xs, t, P, g, y, sel, gdot, proj) -> Stepper | None:
     """Generate, compile (cached) and load the stepper of one mode.
 
     Parameters
@@ -103,6 +124,10 @@ def build_stepper(f, xs, t, P, g, y) -> Stepper | None:
         Guards (may be empty).
     y : casadi.SX
         Output signals.
+    sel, gdot : casadi.SX
+        Guard selectors and time derivatives of the guards.
+    proj : casadi.SX
+        Scaled state with speeds projected onto the rigid links (a function of xs and P).
 
     Returns
     -------
@@ -117,7 +142,10 @@ def build_stepper(f, xs, t, P, g, y) -> Stepper | None:
              ca.Function("kj", [xs, t, P], [ca.densify(ca.jacobian(f, xs))]),
              ca.Function("kt", [xs, t, P], [ca.densify(ca.jacobian(f, t))]),
              ca.Function("kg", [xs, t, P], [ca.densify(gg)]),
-             ca.Function("ko", [xs, t, P], [ca.densify(y)])]
+             ca.Function("ko", [xs, t, P], [ca.densify(y)]),
+             ca.Function("kd", [xs, t, P], [ca.densify(gg), ca.densify(sel if ng else ca.SX.ones(1)),
+                                            ca.densify(gdot if ng else ca.SX.zeros(1))]),
+             ca.Function("kp", [xs, P], [ca.densify(proj)])]
     driver = resources.files("kilnctl.model").joinpath("rosenbrock.c").read_bytes()
     lib_path = compile_sources("mode", {"gen.c": generate_c(funcs, "gen"), "rosenbrock.c": driver})
     if lib_path is None:
@@ -128,4 +156,6 @@ def build_stepper(f, xs, t, P, g, y) -> Stepper | None:
     if lib.kiln_check() != 0:
         return None
     lib.kiln_outputs.restype = ctypes.c_int
+    lib.kiln_guard.restype = ctypes.c_int
+    lib.kiln_project.restype = ctypes.c_int
     return Stepper(lib, n, ng, y.numel())
