@@ -15,7 +15,8 @@ import sys
 from ..errors import KilnctlError
 
 #: subcommand modules, in the order ``kilnctl --help`` lists them
-COMMANDS = ("params_cmd", "design_cmd", "simulate_cmd", "verify_cmd")
+COMMANDS = ("params_cmd", "design_cmd", "simulate_cmd", "verify_cmd", "optimize_cmd", "compare_cmd",
+            "diagnose_cmd", "sweep_cmd")
 
 
 def build_parser() -> argparse.ArgumentParser:
