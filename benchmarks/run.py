@@ -108,10 +108,9 @@ def kilnctl_tolerances():
 
 
 def equal_accuracy(run, err, reps, same_tol):
-    """Loosest tolerance of EA_RTOLS whose run stays within ACCURACY, timed over ``reps`` runs.
-
-    ``run(rtol)`` returns a BaselineRun, ``err(run)`` its max relative error.  Falls back to the
-    run at kilnctl's tolerances (``same_tol``) when none of the looser ones is accurate enough.
+    """Fastest run within ACCURACY: the loosest tolerance of EA_RTOLS that stays within it, or the
+    run at kilnctl's tolerances (``same_tol``) when that one is faster or the looser ones are not
+    accurate enough.  ``run(rtol)`` returns a BaselineRun, ``err(run)`` its max relative error.
     """
     tried = []
     for rt in EA_RTOLS:
@@ -122,7 +121,11 @@ def equal_accuracy(run, err, reps, same_tol):
         tried.append({"rtol": rt, "max_rel_err": e, "wall_s": b.wall_s})
         if e <= ACCURACY:
             times = [b.wall_s] + [run(rt).wall_s for _ in range(reps - 1)]
-            return {"rtol": rt, "median_s": statistics.median(times), "max_rel_err": e, "tried": tried}
+            med = statistics.median(times)
+            tried[-1]["median_s"] = med
+            if not (same_tol["errors"]["max"] <= ACCURACY and same_tol["median_s"] < med):
+                return {"rtol": rt, "median_s": med, "max_rel_err": e, "tried": tried}
+            break  # the tighter default was faster (and accurate enough): take it
     if same_tol["errors"]["max"] <= ACCURACY:
         return {"rtol": same_tol["rtol"], "median_s": same_tol["median_s"], "max_rel_err": same_tol["errors"]["max"],
                 "tried": tried}
@@ -201,9 +204,11 @@ def single_case(model, P, quick, log):
         k_ea["tried"].append({"rtol": rt, "max_rel_err": e})
         if e <= ACCURACY:
             tt, _ = timed(lambda: simulate(P, model=model, t_end=T, rtol=rt, atol=rt / 10), reps)
-            k_ea.update(rtol=rt, median_s=statistics.median(tt), max_rel_err=e)
+            k_ea["tried"][-1]["median_s"] = statistics.median(tt)
+            if statistics.median(tt) < res["median_s"] or res["max_rel_err"] > ACCURACY:
+                k_ea.update(rtol=rt, median_s=statistics.median(tt), max_rel_err=e)
             break
-    else:
+    if "median_s" not in k_ea:  # the default tolerance is the fastest within ACCURACY (or nothing is)
         k_ea.update(rtol=kilnctl_tolerances()[0], median_s=res["median_s"], max_rel_err=res["max_rel_err"])
     res["equal_accuracy"] = k_ea
     log(f"  kilnctl at equal accuracy (<= {ACCURACY:g}): rtol {k_ea['rtol']:g}, median {fmt_s(k_ea['median_s'])}, "
@@ -326,7 +331,9 @@ def sweep_case(P, quick, log, ea_rtol=None, k_ea_rtol=None):
                                  "within_accuracy": max(k_ea_errs) <= ACCURACY}
         log(f"  kilnctl sweep at the micro case's equal-accuracy rtol {k_ea_rtol:g}: {fmt_s(k_ea_s)}, max rel err "
             f"{fmt_err(max(k_ea_errs))} on the subset")
-    k_ea_time = k_ea_s if k_ea_s is not None and max(k_ea_errs) <= ACCURACY else res["median_s"]
+    k_ea_time = res["median_s"]
+    if k_ea_s is not None and max(k_ea_errs) <= ACCURACY:
+        k_ea_time = min(k_ea_s, res["median_s"])
     note = f"timed on {len(subset)} of {len(grid)} grid points (corners, quarters, centre), mean x {len(grid)}"
     res["scipy"] = {"method": meth, "rtol": rtol, "atol": atol, "subset_runs": len(subset),
                     "subset_mean_s": float(np.mean(sc_times)), "extrapolated_s": float(np.mean(sc_times)) * len(grid),
@@ -348,7 +355,7 @@ def sweep_case(P, quick, log, ea_rtol=None, k_ea_rtol=None):
         if e <= ACCURACY:
             break
         rt = float(f"{rt / 10:.0e}")
-    if tried and tried[-1]["max_rel_err"] <= ACCURACY:
+    if tried and tried[-1]["max_rel_err"] <= ACCURACY and tried[-1]["subset_mean_s"] < res["scipy"]["subset_mean_s"]:
         ea = dict(tried[-1])
     else:
         ea = {"rtol": rtol, "subset_mean_s": res["scipy"]["subset_mean_s"], "max_rel_err": res["scipy"]["max_rel_err"]}
@@ -513,6 +520,8 @@ def main(argv=None) -> int:
         micro = results["cases"].get("micro", {})
         ea = micro.get("scipy", {}).get("equal_accuracy", {}).get("rtol")
         k_ea = micro.get("equal_accuracy", {}).get("rtol")
+        if k_ea is not None and abs(k_ea - kilnctl_tolerances()[0]) < 1e-15:
+            k_ea = None  # the default tolerance was kilnctl's fastest within 1e-4: the default pass serves
         results["cases"]["sweep"] = sweep_case(P, args.quick, log, ea_rtol=ea, k_ea_rtol=k_ea)
     if "memory" in cases:
         log("[memory]")
@@ -522,8 +531,8 @@ def main(argv=None) -> int:
     log("")
     log(table(results))
     log("  ratio: baseline time / kilnctl time in this run, baselines at kilnctl's tolerances.  ratio@1e-4: each "
-        "implementation (kilnctl too) at the loosest rtol of 1e-4, 1e-5, 1e-6 whose errors stay within 1e-4 "
-        "('-': the baseline never did).")
+        "implementation (kilnctl too) in its fastest run within 1e-4: the loosest rtol of 1e-4, 1e-5, 1e-6 that "
+        "stays within it, or the default rtol if that was faster ('-': the baseline never got within 1e-4).")
     log("  err: max relative error on peak current, final current, peak stress and event times against a tight "
         "(rtol 1e-10) run of the same implementation; (b) against the hybrid reference of (a) (its smoothing "
         "error; no events).")
