@@ -4,7 +4,7 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test bench clean
+.PHONY: demo test bench docs studies clean
 
 $(STAMP): pyproject.toml
 	@command -v $(PYTHON) >/dev/null 2>&1 || { echo "need $(PYTHON) on PATH (or run: make PYTHON=python3 ...)"; exit 1; }
@@ -21,6 +21,23 @@ test: $(STAMP)
 
 bench: $(STAMP)
 	MPLBACKEND=Agg $(PY) -m benchmarks.run
+
+# the documentation site, into out/site; --strict: any warning (broken link, missing page, docstring) fails
+docs: $(STAMP)
+	$(PY) -m mkdocs build --strict --site-dir out/site
+	@echo "site: out/site/index.html"
+
+# every study: the paper's (run_all.py --docs also renders docs/validation.md), then the others;
+# their figures are copied to docs/figures/
+studies: $(STAMP)
+	MPLBACKEND=Agg $(PY) studies/run_all.py --docs
+	@paper=" $$($(PY) -c "import runpy; print(' '.join(runpy.run_path('studies/run_all.py')['STUDIES']))") run_all "; \
+	for f in studies/*.py; do \
+	  n=$$(basename $$f .py); \
+	  case "$$paper" in *" $$n "*) continue;; esac; \
+	  echo "=== $$n"; MPLBACKEND=Agg $(PY) $$f || exit 1; \
+	  if [ -f studies/out/$$n/$$n.png ]; then cp studies/out/$$n/$$n.png docs/figures/$$n.png; fi; \
+	done
 
 clean:
 	rm -rf $(VENV) out

@@ -23,6 +23,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import signal
 import subprocess
 import sys
@@ -32,8 +33,8 @@ from pathlib import Path
 
 import pandas as pd
 
-from kilnctl.response import write_atomic
-from kilnctl.sweep import LatinHypercube, LogUniform, Study, Uniform, run_sweep
+from kilnctl.files import write_atomic
+from kilnctl.sweep import LatinHypercube, LogUniform, Study, Uniform, code_fingerprint, run_sweep
 
 OUT = Path(__file__).parent / "out" / "sweep_scaling.json"
 T_END = 30.0  # s: a start-up with the slowest ramp (37 rpm/s) settles within it
@@ -61,6 +62,8 @@ def make_study(n: int) -> Study:
 
 def _child(n: int, cache: str) -> int:
     """Run the sweep with a cache until interrupted (the process the benchmark sends SIGINT to)."""
+    # a process started in the background inherits SIGINT ignored: take Ctrl-C as a user's terminal gives it
+    signal.signal(signal.SIGINT, signal.default_int_handler)
     try:
         run_sweep(make_study(n), workers=2, cache=cache, progress=False)
     except KeyboardInterrupt:
@@ -69,17 +72,21 @@ def _child(n: int, cache: str) -> int:
 
 
 def _interrupt_and_resume(n: int, fraction: float, reference: pd.DataFrame) -> dict:
+    # cache keys hash the model's sources: take them as they are now, as the child process will
+    code_fingerprint.cache_clear()
+    code = code_fingerprint()
     cache = Path(tempfile.mkdtemp(prefix="kilnctl-sweep-bench-"))
     cmd = [sys.executable, "-m", "benchmarks.sweep_scaling", "--child", str(cache), "--n", str(n)]
     t0 = time.perf_counter()
     proc = subprocess.Popen(cmd, cwd=Path(__file__).resolve().parents[1])
     target = int(fraction * n)
-    while proc.poll() is None and len(list(cache.rglob("*.json"))) < target:
+    while proc.poll() is None and len(list(cache.rglob("[!.]*.json"))) < target:
         time.sleep(0.2)
     proc.send_signal(signal.SIGINT)
     code = proc.wait(timeout=120)
     t_first = time.perf_counter() - t0
-    cached = len(list(cache.rglob("*.json")))
+    cached = len(list(cache.rglob("[!.]*.json")))
+    code_fingerprint.cache_clear()
     res = run_sweep(make_study(n), workers=2, cache=cache, progress=True)
     cols = ["m_v", "delta_x", "ramp_rate", "peak_stress_Pa", "peak_current_A", "n_events"]
     identical = res.table[cols].equals(reference[cols])
@@ -87,7 +94,8 @@ def _interrupt_and_resume(n: int, fraction: float, reference: pd.DataFrame) -> d
             "points_computed_on_resume": res.info["n_computed"], "points_read_from_cache": res.info["n_cached"],
             "resume_computed_only_missing": res.info["n_computed"] == n - cached,
             "interrupted_run_wall_s": t_first, "resume_wall_s": res.info["wall_s"],
-            "resumed_table_identical_to_uninterrupted": bool(identical), "cache": str(cache)}
+            "resumed_table_identical_to_uninterrupted": bool(identical), "cache": str(cache),
+            "sources_changed_during_the_run": code_fingerprint() != code}
 
 
 def main(argv=None) -> dict:
@@ -113,12 +121,15 @@ def main(argv=None) -> dict:
         sys.exit(_child(args.n, args.child))
     st = make_study(args.n)
     load0 = os.getloadavg()
-    runs = {}
+    runs, cpu = {}, {}
     for workers in (1, 2):
+        c0 = resource.getrusage(resource.RUSAGE_CHILDREN)
         res = run_sweep(st, workers=workers, progress=True)
+        c1 = resource.getrusage(resource.RUSAGE_CHILDREN)  # the pool's workers, reaped at its shutdown
         runs[workers] = res
-        print(f"{workers} worker(s): {res.info['wall_s']:.1f} s for {args.n} start-ups "
-              f"({res.info['n_failed']} failed)", file=sys.stderr)
+        cpu[workers] = (c1.ru_utime + c1.ru_stime) - (c0.ru_utime + c0.ru_stime)
+        print(f"{workers} worker(s): {res.info['wall_s']:.1f} s for {args.n} start-ups, workers' CPU "
+              f"{cpu[workers]:.1f} s ({res.info['n_failed']} failed)", file=sys.stderr)
     same = runs[1].table.drop(columns="cached").equals(runs[2].table.drop(columns="cached"))
     resume = _interrupt_and_resume(args.n, args.interrupt_at, runs[2].table)
     w1, w2 = runs[1].info["wall_s"], runs[2].info["wall_s"]
@@ -127,15 +138,19 @@ def main(argv=None) -> dict:
         "load_average_1min_at_start": load0[0], "load_average_1min_at_end": os.getloadavg()[0],
         "wall_s_1_worker": w1, "wall_s_2_workers": w2, "speedup_1_to_2": w1 / w2,
         "ms_per_startup_1_worker": 1e3 * w1 / args.n, "ms_per_startup_2_workers": 1e3 * w2 / args.n,
+        "worker_cpu_s_1_worker": cpu[1], "worker_cpu_s_2_workers": cpu[2],
+        # share of the cores the workers actually got: 1.0 on an idle machine, less when others compete
+        "cpu_share_1_worker": cpu[1] / w1, "cpu_share_2_workers": cpu[2] / (2 * w2),
         "tables_identical_1_vs_2_workers": bool(same), "n_failed": runs[2].info["n_failed"],
         "resume": resume,
     }
     write_atomic(OUT, json.dumps(out, indent=1))
     print(f"\nsweep scaling: {args.n} micro-model start-ups of {T_END:g} s, {os.cpu_count()} cores, "
           f"load average {load0[0]:.1f} at start, {out['load_average_1min_at_end']:.1f} at end")
-    print(f"  1 worker    {w1:7.1f} s  ({out['ms_per_startup_1_worker']:.0f} ms per start-up)")
-    print(f"  2 workers   {w2:7.1f} s  ({out['ms_per_startup_2_workers']:.0f} ms per start-up)  "
-          f"speed-up {out['speedup_1_to_2']:.2f}; same table: {same}")
+    print(f"  1 worker    {w1:7.1f} s  ({out['ms_per_startup_1_worker']:.0f} ms per start-up; the worker got "
+          f"{out['cpu_share_1_worker']:.0%} of a core)")
+    print(f"  2 workers   {w2:7.1f} s  ({out['ms_per_startup_2_workers']:.0f} ms per start-up; each worker got "
+          f"{out['cpu_share_2_workers']:.0%} of a core)  speed-up {out['speedup_1_to_2']:.2f}; same table: {same}")
     r = resume
     print(f"  interrupted after {r['points_cached_at_interruption']} points (exit code {r['child_exit_code']}); "
           f"resume computed {r['points_computed_on_resume']} and read {r['points_read_from_cache']} from the "

@@ -106,7 +106,7 @@ def run(args) -> int:
         print(study.describe())
         return 0
     from ..sweep import run_sweep
-    from .simulate_cmd import save_figure
+    from ..figures import save_figure
 
     cache = None if args.no_cache else args.cache
     try:

@@ -20,7 +20,7 @@ from concurrent.futures import as_completed as _local_as_completed
 from pathlib import Path
 
 from ..errors import KilnctlError, ParameterError
-from ..response import write_atomic
+from ..files import write_atomic
 from ..simulate import simulate
 
 __all__ = ["run_sweep", "run_point", "PointCache", "EXECUTORS"]

@@ -18,7 +18,7 @@ import numpy as np
 
 from ..errors import KilnctlError, ParameterError, close_matches_hint
 from ..params import SPECS
-from ..response import write_atomic
+from ..files import write_atomic
 from .study import OUTPUTS
 
 __all__ = ["SweepResult", "wilson_interval"]
