@@ -32,6 +32,8 @@ class StageLog:
         Profile numbers at the stage's solution.
     seconds : float
         Wall time of the stage [s].
+    cases : list of str
+        Cases the stage optimized over (the active scenarios).
     """
 
     widths: dict
@@ -41,6 +43,7 @@ class StageLog:
     objective: float
     theta: list
     seconds: float
+    cases: list = field(default_factory=list)
 
 
 def _worst(measures: dict, kind: str) -> tuple[str, StartupMeasures]:
@@ -102,6 +105,8 @@ class RampResult:
     flags: list = field(default_factory=list)
     notes: list = field(default_factory=list)
     traces: dict = field(default_factory=dict, repr=False)
+    active_cases: list = field(default_factory=list)
+    phases: list = field(default_factory=list)
 
     # --- the headline numbers ---------------------------------------------------
     @property
@@ -190,6 +195,8 @@ class RampResult:
             "transcription": self.transcription,
             "solve_time_s": self.solve_seconds,
             "verify_time_s": self.verify_seconds,
+            "active_cases": list(self.active_cases),
+            "phases": list(self.phases),
             "flags": list(self.flags),
             "notes": list(self.notes),
             "cases": {name: {"predicted": self.predicted[name].as_dict(),
@@ -208,6 +215,9 @@ class RampResult:
         """Plain-text report: predicted and verified side by side, against the baseline."""
         s = self.summary()
         prob = self.problem
+        kind_dyn = s["objective"] == "dynamic"
+        dyn_red = None if s["baseline_dynamic_stress_Pa"] is None else \
+            100.0 * (1 - s["dynamic_stress_verified_Pa"] / s["baseline_dynamic_stress_Pa"])
         mpa = lambda v: "-" if v is None else f"{v / 1e6:8.2f}"  # noqa: E731
         lines = [f"start-up ramp, profile {s['profile']}, objective '{s['objective']}', "
                  f"95 % speed by t_max = {prob.t_max:g} s ({'robust, ' + str(len(self.predicted)) + ' cases' if prob.robust else 'nominal'})",
@@ -218,8 +228,10 @@ class RampResult:
                  f"  {'peak dynamic stress [MPa]':34s}{mpa(s['dynamic_stress_predicted_Pa']):>10s}"
                  f"{mpa(s['dynamic_stress_verified_Pa']):>10s}{mpa(s['baseline_dynamic_stress_Pa']):>10s}"]
         if s["reduction_pct"] is not None:
-            lines.append(f"  peak stress {s['reduction_pct']:+.1f} % below the baseline ramp {s['baseline_ramp']:g} rpm/s"
-                         .replace("+-", "-"))
+            red = s["reduction_pct"]
+            lines.append(f"  peak stress {abs(red):.1f} % {'below' if red >= 0 else 'above'} the baseline ramp "
+                         f"{s['baseline_ramp']:g} rpm/s; dynamic stress {abs(s['objective_reduction_pct'] if kind_dyn else dyn_red):.1f} % "
+                         f"{'below' if (s['objective_reduction_pct'] if kind_dyn else dyn_red) >= 0 else 'above'}")
         if s["running_stress_Pa"] is not None:
             lines.append(f"  running load (burden at its angle): {s['running_stress_Pa'] / 1e6:.2f} MPa")
         tts = s["time_to_speed_s"]

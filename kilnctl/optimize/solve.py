@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -14,7 +14,7 @@ from ..simulate import resolve_gains
 from .model import SmoothStartup
 from .problem import RampProblem
 from .result import RampResult, StageLog
-from .transcription import TimeGrid, build_nlp
+from .transcription import TIE_BREAK, TimeGrid, build_nlp
 from .verify import measure_arrays, measure_hybrid
 
 __all__ = ["Stage", "DEFAULT_STAGES", "optimize_ramp", "RampSolveError", "VERIFY_RTOL", "ACCEPTED_STATUS"]
@@ -23,6 +23,8 @@ __all__ = ["Stage", "DEFAULT_STAGES", "optimize_ramp", "RampSolveError", "VERIFY
 VERIFY_RTOL = 0.03
 #: a peak within this factor of the running stress is the running load, not a start-up transient [-]
 RUNNING_LOAD_BAND = 1.03
+#: an inactive scenario joins the optimization when its peak exceeds the active worst by this fraction [-]
+SCREEN_RTOL = 0.005
 #: output step of the prediction (as the hybrid verification's default) [s]
 PREDICT_DT = 1e-3
 #: IPOPT statuses taken as a solution
@@ -109,6 +111,77 @@ def _violation(nlp, w, p):
     return (nlp.g_names[j], float(viol[j])) if viol[j] > FEAS_TOL else (None, float(max(viol[j], 0.0)))
 
 
+def _solve_stages(problem, model, cases, grid, sigma_scale, theta_scale, theta, stages, iters0, *, transcription,
+                  n_shooting, ipopt_options):
+    """Run the continuation on one set of cases; return (theta, stage logs, iterations, status)."""
+    nlp = build_nlp(problem, model, cases, grid, sigma_scale, theta_scale, theta, transcription, n_shooting,
+                    ipopt_options, guess_widths=stages[0].widths)
+    w = nlp.w0.copy()
+    logs, iters, status = [], 0, "Not_Solved"
+    for k_st, st in enumerate(stages):
+        t0 = time.perf_counter()
+        theta_now = w[:nlp.n_theta] * nlp.theta_scale
+        runs = [model.run(cp, theta_now, st.widths, grid.t) for _, cp in cases]
+        c_s, c_d = (max(float(np.max(np.abs(r[k]))) for r in runs) / sigma_scale for k in ("sigma", "sigma_dyn"))
+        p = nlp.parameters(st.beta, c_s, c_d, st.widths)
+        if k_st == 0 and len(cases) > 1:  # the epigraph variable starts just above every case
+            w[nlp.n_theta] = (c_s + TIE_BREAK * c_d if problem.objective == "peak" else c_d) + 0.05
+        sol = nlp.solver(x0=w, lbx=nlp.lbw, ubx=nlp.ubw, lbg=nlp.lbg, ubg=nlp.ubg, p=p)
+        stats = nlp.solver.stats()
+        status = stats.get("return_status", "unknown")
+        n_it = int(stats.get("iter_count", 0))
+        iters += n_it
+        w_new = np.asarray(sol["x"]).ravel()
+        if status not in ACCEPTED_STATUS:
+            cname, viol = _violation(nlp, w_new, p)
+            where = f"; most violated constraint: {cname} (by {viol:.3g})" if cname else \
+                "; no constraint is violated at the last point (the solver stalled)"
+            raise RampSolveError(
+                f"ramp optimization failed: IPOPT returned {status} after {iters0 + iters} iterations at the stage "
+                f"with smoothing {st.widths}{where}", status, cname, viol, iters0 + iters)
+        w = w_new
+        logs.append(StageLog(st.widths, st.beta, status, n_it, float(sol["f"]),
+                             list(w[:nlp.n_theta] * nlp.theta_scale), time.perf_counter() - t0,
+                             [name for name, _ in cases]))
+    return w[:nlp.n_theta] * nlp.theta_scale, logs, iters, status
+
+
+def _case_numbers(problem, model, cp, theta, widths, grid):
+    """Sampled peaks and constraint ratios of one case on the grid (a cheap run without sensitivities)."""
+    r = model.run(cp, theta, widths, grid.t)
+    last = grid.t >= grid.t[-1] - 5.0
+    return {"sigma": float(np.max(np.abs(r["sigma"]))), "sigma_dyn": float(np.max(np.abs(r["sigma_dyn"]))),
+            "running": float(np.mean(r["sigma"][last])),
+            "current": float(np.max(np.abs(r["i_a"]))) / cp.I_max, "voltage": float(np.max(np.abs(r["e_a"]))) / cp.V_max,
+            "speed": float(r["speed_rpm"][grid.k_tmax]) / cp.omega_ref}
+
+
+def _initial_active(problem, model, cases, theta, widths, grid) -> list[int]:
+    """Cases worst at the starting point: nominal, highest stresses, highest current and voltage, slowest."""
+    nums = [_case_numbers(problem, model, cp, theta, widths, grid) for _, cp in cases]
+    pick = {0} if cases[0][0] == "nominal" else set()
+    keys = ["sigma_dyn", "current", "voltage"] + (["sigma"] if problem.objective == "peak" else [])
+    for k in keys:
+        pick.add(int(np.argmax([n[k] for n in nums])))
+    pick.add(int(np.argmin([n["speed"] for n in nums])))
+    return sorted(pick)
+
+
+def _screen(problem, model, cases, active, theta, widths, grid) -> list[int]:
+    """Inactive cases that are worse than the active worst case or break a constraint at theta."""
+    nums = [_case_numbers(problem, model, cp, theta, widths, grid) for _, cp in cases]
+    keys = ["sigma_dyn"] + (["sigma"] if problem.objective == "peak" else [])
+    worst = {k: max(nums[i][k] for i in active) for k in keys}
+    out = []
+    for i, n in enumerate(nums):
+        if i in active:
+            continue
+        if any(n[k] > worst[k] * (1 + SCREEN_RTOL) for k in keys) or n["current"] > 1 or n["voltage"] > 1 \
+                or n["speed"] < problem.speed_fraction * (1 - 1e-4):
+            out.append(i)
+    return out
+
+
 def _infeasibility_precheck(problem: RampProblem, cases):
     """Raise at once for requests no ramp can meet (the reference itself must be at speed in time)."""
     hi = problem.profile.bounds()[1]
@@ -123,7 +196,7 @@ def _infeasibility_precheck(problem: RampProblem, cases):
 def optimize_ramp(problem: RampProblem, *, transcription: str = "single_shooting", stages=DEFAULT_STAGES,
                   dt: float = 1e-2, n_shooting: int = 10, verify: bool = True, tolerance: float = VERIFY_RTOL,
                   initial=None, ipopt_options: dict | None = None, rtol: float = 1e-8,
-                  atol: float = 1e-8) -> RampResult:
+                  atol: float = 1e-8, screen: bool = True) -> RampResult:
     """Find the start-up ramp of least peak gear stress, and verify it on the hybrid plant.
 
     Parameters
@@ -155,6 +228,13 @@ def optimize_ramp(problem: RampProblem, *, transcription: str = "single_shooting
         CVODES tolerances of the smooth model during the solve (states and
         sensitivities scaled to order one); the prediction is re-run at
         rtol 1e-8.
+    screen : bool, default True
+        With scenarios: optimize over the cases that are worst at the start
+        (nominal, highest stress, highest current, slowest), then check every
+        case at the solution and add those that exceed the worst active case
+        or a constraint, and re-solve (scenario generation; the optimum is
+        that of all cases, at a fraction of the cost).  False: all cases at
+        once.
 
     Returns
     -------
@@ -191,34 +271,34 @@ def optimize_ramp(problem: RampProblem, *, transcription: str = "single_shooting
     fine = TimeGrid.make(problem.t_max, problem.horizon, PREDICT_DT).t
     run0 = model.run(cases[0][1], theta0, stages[0].widths, grid.t)
     sigma_scale = max(float(np.max(np.abs(run0["sigma"]))), 1e6)
-    nlp = build_nlp(problem, model, cases, grid, sigma_scale, theta_scale, theta0, transcription, n_shooting,
-                    ipopt_options, guess_widths=stages[0].widths)
-    w = nlp.w0.copy()
-    logs, iters = [], 0
-    status = "Not_Solved"
-    for st in stages:
-        t0 = time.perf_counter()
-        theta_now = w[:nlp.n_theta] * nlp.theta_scale
-        runs = [model.run(cp, theta_now, st.widths, grid.t) for _, cp in cases]
-        c_s, c_d = (max(float(np.max(np.abs(r[k]))) for r in runs) / sigma_scale for k in ("sigma", "sigma_dyn"))
-        p = nlp.parameters(st.beta, c_s, c_d, st.widths)
-        sol = nlp.solver(x0=w, lbx=nlp.lbw, ubx=nlp.ubw, lbg=nlp.lbg, ubg=nlp.ubg, p=p)
-        stats = nlp.solver.stats()
-        status = stats.get("return_status", "unknown")
-        n_it = int(stats.get("iter_count", 0))
-        iters += n_it
-        w_new = np.asarray(sol["x"]).ravel()
-        if status not in ACCEPTED_STATUS:
-            cname, viol = _violation(nlp, w_new, p)
-            where = f"; most violated constraint: {cname} (by {viol:.3g})" if cname else \
-                "; no constraint is violated at the last point (the solver stalled)"
-            raise RampSolveError(
-                f"ramp optimization failed: IPOPT returned {status} after {iters} iterations at the stage with "
-                f"smoothing {st.widths}{where}", status, cname, viol, iters)
-        w = w_new
-        logs.append(StageLog(st.widths, st.beta, status, n_it, float(sol["f"]),
-                             list(w[:nlp.n_theta] * nlp.theta_scale), time.perf_counter() - t0))
-    values = w[:nlp.n_theta] * nlp.theta_scale
+    solver_args = dict(transcription=transcription, n_shooting=n_shooting, ipopt_options=ipopt_options)
+    phases = ["dynamic", "peak"] if problem.objective == "peak" else ["dynamic"]
+    theta, logs, iters, status = theta0, [], 0, "Not_Solved"
+    phase_log = []
+    for k_ph, objective in enumerate(phases):
+        sub = replace(problem, objective=objective)
+        if len(cases) > 1 and screen:
+            active = _initial_active(sub, model, cases, theta, stages[0].widths, grid)
+        else:
+            active = list(range(len(cases)))
+        for _round in range(len(cases)):
+            run_stages = stages if (_round == 0 and k_ph == 0) else stages[-1:]
+            theta, lg, it, status = _solve_stages(sub, model, [cases[i] for i in active], grid, sigma_scale,
+                                                  theta_scale, theta, run_stages, iters, **solver_args)
+            logs += lg
+            iters += it
+            if len(active) == len(cases):
+                break
+            extra = _screen(sub, model, cases, active, theta, stages[-1].widths, grid)
+            if not extra:
+                break
+            active = sorted(set(active) | set(extra))
+        phase_log.append(objective)
+        if objective == "dynamic" and len(phases) > 1:
+            nums = [_case_numbers(problem, model, cp, theta, stages[-1].widths, grid) for _, cp in cases]
+            if max(n["sigma"] for n in nums) <= RUNNING_LOAD_BAND * max(n["running"] for n in nums):
+                break  # the peak is pinned at the running load: the least dynamic stress decides (lexicographic)
+    values = np.asarray(theta, dtype=float)
     solve_seconds = time.perf_counter() - t_start
     # prediction: the smooth model at the last stage's widths, measured like the hybrid plant
     predicted, smooth_runs = {}, {}
@@ -229,8 +309,10 @@ def optimize_ramp(problem: RampProblem, *, transcription: str = "single_shooting
         smooth_runs[name] = r
         predicted[name] = measure_arrays(r["t"], r["sigma"], r["sigma_dyn"], r["i_a"], r["e_a"], r["speed_rpm"],
                                          problem.speed_fraction * cp.omega_ref)
-    result = RampResult(problem, values, predicted, {}, {}, status, iters, logs, nlp.transcription, solve_seconds,
+    result = RampResult(problem, values, predicted, {}, {}, status, iters, logs, transcription, solve_seconds,
                         0.0, float(tolerance))
+    result.active_cases = [cases[i][0] for i in active]
+    result.phases = phase_log
     if verify:
         _verify(result, cases, smooth_runs)
     return result
@@ -262,6 +344,8 @@ def _verify(result: RampResult, cases, smooth_runs) -> None:
             got = "never" if m.time_to_speed_s is None else f"after {m.time_to_speed_s:.3f} s"
             flags.append(f"{name}: the hybrid plant reaches {prob.speed_fraction:g} of omega_ref {got}, "
                          f"t_max = {prob.t_max:g} s")
+        if m.engine.startswith("cvodes"):
+            result.notes.append(f"{name}: verified with the CVODES engine; the default engine stopped on an event storm")
         if m.limit_events:
             flags.append(f"{name}: a drive limit acted {m.limit_events} time(s) on the hybrid plant "
                          f"(peak current {m.peak_current_A:.0f} A, voltage {m.peak_voltage_V:.0f} V)")
