@@ -3,17 +3,18 @@
 Each mode combination is smooth.  By default it is integrated by a compiled
 ROS3P Rosenbrock stepper (:mod:`kilnctl.model.stepper`: CasADi-generated C for
 the right-hand side, Jacobian and guards, driven by ``rosenbrock.c``) that
-checks every guard after every accepted step and locates a crossing by
-Illinois root finding on real integrator steps, to ``event_tol`` seconds.
+checks every guard at every grid point k*dt (on the step's interpolant) and at
+every step end, and locates a crossing by Illinois root finding on real
+integrator steps, to ``event_tol`` seconds.
 The alternative (``method='cvodes'``) integrates with CVODES (BDF) over
 chunks and samples the guards every ``dt``.  The mode then switches and, if the new mode is
 itself left at once, the switch cascades; a zero-time cycle of modes is
 resolved by the component's Filippov sliding mode (the burden's ``held``
 mode) or reported as :class:`EventStormError` naming the mode pair.
 
-With ``method='cvodes'`` guards are sampled every ``dt`` seconds, so an
-excursion shorter than ``dt`` between two samples is not seen; the compiled
-stepper checks after every step (at most ``max_step``, default 10*dt).
+Both engines check the guards at least every ``dt`` seconds, so an excursion
+shorter than ``dt`` that starts and ends between two checks is not seen
+(choose ``dt`` below the shortest effect you care about).
 Outputs are sampled on the global grid k*dt plus every event point (twice:
 before and after the switch).
 """
@@ -404,7 +405,8 @@ def simulate(params: Parameters | None = None, model: str = "macro", t_end: floa
         when a C compiler is available.  The two agree to about 1e-6 at tight
         tolerances (tests/test_engines_agree.py).
     max_step : float, optional
-        ``method='ros3p'`` only: largest step [s] (default 10*dt).
+        ``method='ros3p'`` only: largest step [s] (default 100*dt); guards are
+        checked every ``dt`` on the step's interpolant whatever the step.
     n_grid : int, default 500
         ``method='cvodes'`` only: grid points per integrator call (chunks of
         n_grid*dt seconds).
@@ -467,7 +469,7 @@ def simulate(params: Parameters | None = None, model: str = "macro", t_end: floa
     if method == "auto":
         method = "ros3p" if plant.functions(mode0).stepper is not None else "cvodes"
     if method == "ros3p":
-        hmax = 10 * dt if max_step is None else float(max_step)
+        hmax = 100 * dt if max_step is None else float(max_step)
         eng.run_stepped(xs0, mode0, float(t_end), float(dt), rtol, atol, hmax)
     else:
         eng.run(xs0, mode0, float(t_end), float(dt))

@@ -137,7 +137,7 @@ int kiln_run(int n, int ng, const double* P, double t0, double t_end, const doub
     c->P = P;
     double x[NMAX], f0[NMAX], x1[NMAX], f1[NMAX], errv[NMAX], ft[NMAX], tmp[NMAX];
     double J[NMAX * NMAX], W[NMAX * NMAX];
-    double g0[GMAX], g1[GMAX], gt[GMAX];
+    double g0[GMAX], g1[GMAX], gt[GMAX], gi[GMAX];
     int piv[NMAX];
     int status = 0, steps = 0, nout = 0;
     double t = t0, h = h0 > 0 ? h0 : fmin(1e-4, hmax);
@@ -192,11 +192,25 @@ int kiln_run(int n, int ng, const double* P, double t0, double t_end, const doub
         }
         steps++;
         if (call3(kg, c, x1, t1, g1)) { status = -2; break; }
-        /* first guard to cross in (t, t1]: Illinois on real steps from (t, x) */
-        int jbest = -1; double tbest = t1;
+        /* guards on the step's interpolant at every grid point k*dt_out inside (t, t1), so that an
+           excursion longer than dt_out is seen whatever the step size; then at t1 */
+        double t_hi = t1;
+        double* g_hi = g1;
+        if (ng > 0) {
+            double kk = floor(t / dt_out * (1 + 1e-14)) + 1.0;
+            for (double tau = kk * dt_out; tau < t1 * (1 - 1e-14); kk += 1.0, tau = kk * dt_out) {
+                hermite(n, t, x, f0, t1, x1, f1, tau, tmp);
+                if (call3(kg, c, tmp, tau, gt)) { status = -2; goto done; }
+                int hit = 0;
+                for (int j = 0; j < ng; j++) if (gt[j] < -GUARD_EPS) hit = 1;
+                if (hit) { t_hi = tau; memcpy(gi, gt, ng * sizeof(double)); g_hi = gi; break; }
+            }
+        }
+        /* first guard to cross in (t, t_hi]: Illinois on real steps from (t, x) */
+        int jbest = -1; double tbest = t_hi;
         for (int j = 0; j < ng; j++) {
-            if (g1[j] < -GUARD_EPS) {
-                double a = t, fa = g0[j] > 0 ? g0[j] : 1e-300, b = t1, fb = g1[j];
+            if (g_hi[j] < -GUARD_EPS) {
+                double a = t, fa = g0[j] > 0 ? g0[j] : 1e-300, b = t_hi, fb = g_hi[j];
                 int side = 0;
                 for (int it = 0; it < 100 && b - a > event_tol; it++) {
                     double m = b - fb * (b - a) / (fb - fa);
