@@ -151,3 +151,41 @@ def test_result_files_are_written_whole(tmp_path):
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".tmp")] == []
     with pytest.raises(Exception, match="table format"):
         res.save(tmp_path / "r.xlsx")
+
+
+def _fake_result(space, stress):
+    """A SweepResult with outputs from a formula (no simulation), for the table and figure code."""
+    from kilnctl.sweep import SweepResult
+
+    st = Study(space, outputs=["peak_stress_Pa"], model="macro", t_end=5.0)
+    cols = st.samples()
+    recs = [{"key": str(i), "status": "ok", "error": "", "custom": {},
+             "summary": {"peak_stress_Pa": stress({k: cols[k][i] for k in cols})}} for i in range(len(st))]
+    return SweepResult.from_records(st, recs, [False] * len(st), {"n_failed": 0, "n_points": len(st)})
+
+
+def test_exceedance_counts_and_wilson_interval():
+    from kilnctl.sweep import MonteCarlo, Uniform, wilson_interval
+
+    res = _fake_result(MonteCarlo({"m_v": Uniform(200e3, 1000e3)}, n=100, seed=4), lambda p: p["m_v"] * 200.0)
+    ex = res.exceedance("peak_stress_Pa", 180e6)  # stress > 180 MPa <=> m_v > 900 t
+    assert ex["n_exceed"] == int((res.table["m_v"] > 900e3).sum()) and ex["n"] == 100
+    # truth: Wilson 95 % interval of 10/100 is [0.0552, 0.1744] (hand calculation, z = 1.96)
+    lo, hi = wilson_interval(10, 100)
+    assert (round(lo, 4), round(hi, 4)) == (0.0552, 0.1744)
+
+
+def test_plots_of_each_space_kind():
+    from kilnctl.sweep import MonteCarlo, Uniform
+
+    grid = _fake_result(Grid({"m_v": [3e5, 6e5, 9e5], "delta_x": [0.0, 0.008, 0.016], "ramp_rate": [74.0, 740.0]}),
+                        lambda p: p["m_v"] * 200 + p["delta_x"] * p["ramp_rate"] * 2e7)
+    fig = grid.plot(threshold=150e6)
+    maps = [ax for ax in fig.axes if ax.get_title().startswith("ramp_rate")]
+    assert [ax.get_title() for ax in maps] == ["ramp_rate = 74 rpm/s", "ramp_rate = 740 rpm/s"]
+    assert maps[0].get_xlabel() == "delta_x [mm]" and maps[0].get_ylabel() == "m_v [t]"  # display units
+    assert fig.axes[-1].get_ylabel().startswith("peak_stress_Pa [MPa]")     # the colour bar
+    sample = _fake_result(MonteCarlo({"m_v": Uniform(2e5, 1e6)}, n=50, seed=1), lambda p: p["m_v"] * 200.0)
+    fig = sample.plot()
+    assert fig.axes[0].get_xlabel() == "m_v [t]"  # one variable: the output against it
+    assert grid.worst(n=1)["m_v"].item() == 9e5 and grid.worst(n=1)["ramp_rate"].item() == 740.0
