@@ -21,7 +21,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from ..errors import ModelError
+from ..errors import ModelError, OptimizationError
 from ..model.assembly import Plant
 from ..model.base import OPTION_NAMES
 from ..model.kiln import BEARING_OMEGA_EPS
@@ -31,6 +31,9 @@ from .problem import Profile
 
 __all__ = ["SmoothStartup", "load_stress", "OUTPUTS", "smooth_components", "hybrid_components"]
 
+#: tolerance factors tried in turn when CVODES fails (seen: a trial Newton iterate at the backlash impact
+#: made the right-hand side non-finite at rtol 1e-8, while 1e-7 and 1e-9 ran)
+RETRY_TIGHTEN = (1.0, 0.1)
 #: output rows of the smooth model
 OUTPUTS = ("sigma", "sigma_dyn", "i_a", "e_a", "speed_rpm")
 
@@ -184,7 +187,7 @@ class SmoothStartup:
         parts = [given[i] / self.plant.scales[i] if i in given else float(xs0[i]) for i in range(len(xs0))]
         return ca.vertcat(*parts)
 
-    def integrator(self, t0: float, grid, quad=None) -> ca.Function:
+    def integrator(self, t0: float, grid, quad=None, tighten: float = 1.0) -> ca.Function:
         """CVODES integrator from t0 returning the scaled states at each time of ``grid`` (cached).
 
         Parameters
@@ -197,6 +200,8 @@ class SmoothStartup:
             Quadrature integrands ``q`` (functions of :attr:`xs`, :attr:`t`,
             :attr:`P` and extra parameters ``pq``), integrated with error
             control; ``name`` keys the cache.
+        tighten : float, default 1.0
+            Factor on the tolerances (0.1: ten times tighter).
 
         Returns
         -------
@@ -204,11 +209,13 @@ class SmoothStartup:
             ``x0``, ``p`` (= P, or [P; pq] with quadratures) -> ``xf``
             (nx x len(grid)) and ``qf`` (cumulative quadratures at the grid).
         """
-        key = (float(t0), tuple(np.round(np.asarray(grid, dtype=float), 12)), None if quad is None else quad[0])
+        key = (float(t0), tuple(np.round(np.asarray(grid, dtype=float), 12)), None if quad is None else quad[0],
+               float(tighten))
         F = self._integrators.get(key)
         if F is None:
             dae = {"x": self.xs, "t": self.t, "p": self.P, "ode": self.f_expr}
-            opts = {"abstol": self.atol, "reltol": self.rtol, "max_num_steps": 500000, "fsens_err_con": True}
+            opts = {"abstol": self.atol * tighten, "reltol": self.rtol * tighten, "max_num_steps": 500000,
+                    "fsens_err_con": True}
             if quad is not None:
                 dae["p"] = ca.vertcat(self.P, quad[2])
                 dae["quad"] = quad[1]
@@ -242,11 +249,25 @@ class SmoothStartup:
         -------
         dict
             ``t`` and one array per name of :data:`OUTPUTS`.
+
+        Raises
+        ------
+        OptimizationError
+            CVODES failed at the model's tolerances and at ten times tighter ones.
         """
         grid = np.asarray(grid, dtype=float)
         P = self.param_vector(params)
-        F = self.integrator(0.0, grid)
-        X = F(x0=self.x0(params, np.asarray(theta, dtype=float), widths), p=P)["xf"]
+        x0 = self.x0(params, np.asarray(theta, dtype=float), widths)
+        X = None
+        for tighten in RETRY_TIGHTEN:
+            try:
+                X = self.integrator(0.0, grid, tighten=tighten)(x0=x0, p=P)["xf"]
+                break
+            except RuntimeError as exc:
+                why = str(exc).splitlines()[-1]
+        if X is None:
+            raise OptimizationError(f"the smooth model failed to integrate at profile numbers {list(theta)} "
+                                    f"(also with tighter tolerances): {why}")
         Y = np.asarray(self.output_map(len(grid))(X, grid, P))
         out = {"t": grid}
         out.update({n: Y[i] for i, n in enumerate(OUTPUTS)})

@@ -20,7 +20,7 @@ import casadi as ca
 import numpy as np
 
 from ..errors import OptimizationError
-from .model import OUTPUTS, SmoothStartup
+from .model import OUTPUTS, RETRY_TIGHTEN, SmoothStartup
 
 __all__ = ["SensitivityRun", "CaseCallback", "smooth_max_np"]
 
@@ -81,14 +81,24 @@ class SensitivityRun:
         self.nq = q.shape[0]
         dae = {"x": X, "t": model.t, "p": ca.vertcat(model.P, pq), "ode": aug,
                "quad": ca.vertcat(q, ca.vec(ca.mtimes(qx, S).T))}
-        opts = {"abstol": atol, "reltol": rtol, "max_num_steps": 1000000, "quad_err_con": True}
-        self.F = ca.integrator("sens", "cvodes", dae, 0.0, list(self.grid), opts)
+        self._dae, self._tol = dae, (rtol, atol)
+        self._F = {}
         y = model.y_expr
         dy = ca.mtimes(ca.jacobian(y, model.xs), S)
         self.Y = ca.Function("ydy", [X, model.t, model.P], [y, ca.vec(dy)]).map(len(self.grid))
         self.S0 = np.zeros((nx, nth))
         for k, i in enumerate(model.theta_index):
             self.S0[i, k] = 1.0 / model.plant.scales[i]
+
+    def integrator(self, tighten: float = 1.0) -> ca.Function:
+        """The augmented CVODES integrator at tolerances times ``tighten`` (cached)."""
+        F = self._F.get(tighten)
+        if F is None:
+            rtol, atol = self._tol
+            opts = {"abstol": atol * tighten, "reltol": rtol * tighten, "max_num_steps": 1000000,
+                    "quad_err_con": True}
+            F = self._F[tighten] = ca.integrator("sens", "cvodes", self._dae, 0.0, list(self.grid), opts)
+        return F
 
     def __call__(self, params, theta, widths: dict, pq) -> dict:
         """Run and return outputs, objective integral and their derivatives with respect to theta.
@@ -114,16 +124,22 @@ class SensitivityRun:
         Raises
         ------
         OptimizationError
-            CVODES failed (the message names the profile numbers).
+            CVODES failed, also at ten times tighter tolerances (the message
+            names the profile numbers).
         """
         P = self.model.param_vector(params)
         x0 = np.asarray(self.model.x0(params, np.asarray(theta, float), widths), dtype=float).ravel()
         X0 = np.concatenate([x0, self.S0.ravel(order="F")])
-        try:
-            r = self.F(x0=X0, p=np.concatenate([P, np.asarray(pq, float)]))
-        except RuntimeError as exc:
-            raise OptimizationError(f"the smooth model failed to integrate at profile numbers {list(theta)}: "
-                                    f"{str(exc).splitlines()[-1]}") from None
+        r = None
+        for tighten in RETRY_TIGHTEN:
+            try:
+                r = self.integrator(tighten)(x0=X0, p=np.concatenate([P, np.asarray(pq, float)]))
+                break
+            except RuntimeError as exc:
+                why = str(exc).splitlines()[-1]
+        if r is None:
+            raise OptimizationError(f"the smooth model failed to integrate at profile numbers {list(theta)} "
+                                    f"(also with tighter tolerances): {why}")
         Xa = np.asarray(r["xf"])
         qf = np.asarray(r["qf"])
         y, dy = self.Y(Xa, self.grid, P)
