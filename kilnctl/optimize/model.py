@@ -159,7 +159,17 @@ class SmoothStartup:
         return tuple(n for n in ("smooth_ds", "smooth_v", "ramp_corner") if n in self.index)
 
     def param_vector(self, params: Parameters) -> np.ndarray:
-        """Numeric parameter vector P (gains must be resolved)."""
+        """Numeric parameter vector P in :data:`kilnctl.model.base.NUMERIC_NAMES` order.
+
+        Parameters
+        ----------
+        params : Parameters
+            Parameter set with the gains resolved (``gains = 'given'``).
+
+        Returns
+        -------
+        ndarray
+        """
         if params.gains != "given":
             raise ModelError("resolve the PID gains first (kilnctl.simulate.resolve_gains)")
         return self.plant.param_vector(params)
@@ -225,7 +235,18 @@ class SmoothStartup:
         return F
 
     def output_map(self, n: int) -> ca.Function:
-        """The outputs mapped over ``n`` grid points: (XS, T, P) -> Y (5 x n) (cached)."""
+        """The outputs mapped over ``n`` grid points (cached).
+
+        Parameters
+        ----------
+        n : int
+            Number of grid points.
+
+        Returns
+        -------
+        casadi.Function
+            (XS, T, P) -> Y, 5 x n rows in :data:`OUTPUTS` order.
+        """
         m = self._maps.get(n)
         if m is None:
             m = self._maps[n] = self.outputs.map(n)

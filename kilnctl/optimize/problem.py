@@ -58,8 +58,8 @@ class Profile:
         S-curve (acceleration limit and jerk); ``pwl``: piecewise-linear
         with ``n`` segments of equal speed increment.
     n : int
-        Number of segments (1 for ``constant``, 2 for ``scurve``'s two numbers
-        is not implied: see :attr:`names`).
+        Number of segments of ``pwl`` (1 for ``constant``; 2 for ``scurve``,
+        its two numbers: see :attr:`names`).
     """
 
     kind: str
@@ -213,7 +213,20 @@ class Profile:
         return d
 
     def equivalent_rate(self, values, omega_ref: float) -> float:
-        """Mean rate omega_ref / end time [rpm/s] (the constant ramp that ends at the same time)."""
+        """Mean rate omega_ref / end time: the constant ramp that ends at the same time.
+
+        Parameters
+        ----------
+        values : sequence of float
+            Decision variables.
+        omega_ref : float
+            Speed set point [rpm].
+
+        Returns
+        -------
+        float
+            Rate [rpm/s].
+        """
         return omega_ref / self.end_time(values, omega_ref)
 
 
@@ -233,7 +246,17 @@ class Scenario:
     changes: dict = field(default_factory=dict)
 
     def apply(self, params: Parameters) -> Parameters:
-        """Return ``params`` with this scenario's changes."""
+        """Return ``params`` with this scenario's changes.
+
+        Parameters
+        ----------
+        params : Parameters
+            Nominal set.
+
+        Returns
+        -------
+        Parameters
+        """
         return params.replace(**self.changes) if self.changes else params
 
 

@@ -91,7 +91,17 @@ class SensitivityRun:
             self.S0[i, k] = 1.0 / model.plant.scales[i]
 
     def integrator(self, tighten: float = 1.0) -> ca.Function:
-        """The augmented CVODES integrator at tolerances times ``tighten`` (cached)."""
+        """The augmented CVODES integrator (cached).
+
+        Parameters
+        ----------
+        tighten : float, default 1.0
+            Factor on the tolerances.
+
+        Returns
+        -------
+        casadi.Function
+        """
         F = self._F.get(tighten)
         if F is None:
             rtol, atol = self._tol
@@ -189,7 +199,19 @@ class CaseCallback(ca.Callback):
         self.construct("cases", {"enable_fd": False})
 
     def set_stage(self, beta: float, c_s: float, c_d: float, widths: dict, inv_scale: float) -> None:
-        """Smoothing of the current continuation stage (clears the cache)."""
+        """Set the smoothing of the current continuation stage (clears the cache).
+
+        Parameters
+        ----------
+        beta : float
+            Smooth-maximum sharpness [1/stress scale].
+        c_s, c_d : float
+            Shifts of the peak and dynamic stress integrands [stress scales].
+        widths : dict
+            Smoothing widths.
+        inv_scale : float
+            1/stress scale [1/Pa].
+        """
         self.stage = (float(beta), float(c_s), float(c_d), dict(widths), float(inv_scale))
         self._key = None
 
@@ -206,7 +228,18 @@ class CaseCallback(ca.Callback):
         return ca.Sparsity.dense(self.n_out, 1)
 
     def evaluate(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Values (n_out,) and Jacobian (n_out x n_z) at scaled profile numbers z."""
+        """Values and Jacobian at scaled profile numbers (one sensitivity run per case, cached).
+
+        Parameters
+        ----------
+        z : ndarray
+            Scaled profile numbers.
+
+        Returns
+        -------
+        values : ndarray, shape (n_out,)
+        jacobian : ndarray, shape (n_out, n_z)
+        """
         z = np.asarray(z, float).ravel()
         key = z.tobytes()
         if key == self._key:

@@ -65,7 +65,24 @@ class RampSweep:
     params: Parameters
 
     def at(self, rate: float) -> dict:
-        """Measures of the run with ramp constant ``rate`` [rpm/s] (must be in the sweep)."""
+        """Measures of one run of the sweep.
+
+        Parameters
+        ----------
+        rate : float
+            Ramp constant [rpm/s]; must be one of the sweep's.
+
+        Returns
+        -------
+        dict
+            ``rate``, ``peak_stress_Pa``, ``dynamic_stress_Pa``, ``time_to_speed_s``,
+            ``peak_current_A``, ``running_stress_Pa``, ``limit_events``.
+
+        Raises
+        ------
+        KeyError
+            ``rate`` is not in the sweep.
+        """
         k = int(np.argmin(np.abs(self.rate - rate)))
         if not np.isclose(self.rate[k], rate):
             raise KeyError(f"ramp constant {rate} rpm/s is not in the sweep")

@@ -139,7 +139,22 @@ class NLP:
     inv_scale: float = 1.0
 
     def parameters(self, beta: float, c_s: float, c_d: float, widths: dict) -> np.ndarray:
-        """Set a continuation stage (sharpness, shifts, widths); return the NLP parameter vector."""
+        """Set a continuation stage and return the NLP parameter vector.
+
+        Parameters
+        ----------
+        beta : float
+            Smooth-maximum sharpness [1/stress scale].
+        c_s, c_d : float
+            Shifts of the peak and dynamic stress integrands [stress scales].
+        widths : dict
+            Smoothing widths by state name.
+
+        Returns
+        -------
+        ndarray
+            [beta, c_s, c_d, widths...].
+        """
         if self.callback is not None:
             self.callback.set_stage(beta, c_s, c_d, widths, self.inv_scale)
         return np.array([beta, c_s, c_d] + [widths[n] for n in self.width_names], dtype=float)

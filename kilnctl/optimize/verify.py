@@ -87,7 +87,18 @@ class StartupMeasures:
     engine: str = ""
 
     def objective(self, kind: str) -> float:
-        """The measure an objective ``'peak'`` or ``'dynamic'`` refers to [Pa]."""
+        """The measure an objective refers to.
+
+        Parameters
+        ----------
+        kind : {'peak', 'dynamic'}
+            Objective.
+
+        Returns
+        -------
+        float
+            Peak stress or peak dynamic stress [Pa].
+        """
         return self.peak_stress_Pa if kind == "peak" else self.peak_dynamic_stress_Pa
 
     def as_dict(self) -> dict:

@@ -1,0 +1,45 @@
+"""The ramp-optimization step of ``make demo`` (called from :mod:`kilnctl.demo`)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from ..params import Parameters
+from .problem import RampProblem
+from .result import RampResult
+from .solve import optimize_ramp
+
+__all__ = ["demo_ramp"]
+
+
+def demo_ramp(out, params: Parameters | None = None, profile: str = "scurve", t_max: float = 10.0) -> RampResult:
+    """Optimize the start-up ramp, write the comparison figure and table, print the table.
+
+    Parameters
+    ----------
+    out : path-like
+        Output folder (created); receives ``ramp_optimization.png`` and
+        ``ramp_optimization.txt``.
+    params : Parameters, optional
+        Parameter set (default: Table 1 with the designed gains).
+    profile : str, default 'scurve'
+        Profile family (``'constant'``, ``'scurve'``, ``'pwl:N'``).
+    t_max : float, default 10.0
+        Time by which the motor must reach 95 % of its set point [s].
+
+    Returns
+    -------
+    RampResult
+    """
+    from matplotlib.figure import Figure
+
+    from ..figures import save_figure
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    result = optimize_ramp(RampProblem(Parameters() if params is None else params, profile=profile, t_max=t_max))
+    save_figure(result.plot(fig=Figure(figsize=(10, 8))), out / "ramp_optimization.png")
+    text = result.table()
+    (out / "ramp_optimization.txt").write_text(text + "\n")
+    print(text)
+    return result
