@@ -19,7 +19,9 @@ from matplotlib.figure import Figure
 
 from kilnctl import Parameters
 from kilnctl.report import PaperTable, oscillation, settle_time
-from kilnctl.simulate import resolve_gains, simulate
+from kilnctl.simulate import simulate
+from kilnctl.sweep import Study
+from kilnctl.sweep.space import Space
 
 STUDY = "fig04_friction"
 OUT = Path(__file__).parent / "out" / STUDY
@@ -67,26 +69,69 @@ def mu_c_for_current(p: Parameters, current: float) -> float:
     return math.tan(math.asin(torque_kiln / (p.m_v * p.g * p.L))) * p.L / p.R
 
 
-def measure(r) -> dict:
-    """Final current, its settling time and oscillation of one run.
+class Pairs(Space):
+    """Points listed one by one: Fig. 4 varies mu_c and mu_s together (a Grid takes every combination).
 
     Parameters
     ----------
-    r : Response
-        A macro-model run.
-
-    Returns
-    -------
-    dict
-        ``final`` and ``mean20`` (means of the last 5 and 20 s) [A], ``settle`` (within 5 % of
-        final) [s] or None, ``ptp`` [A] and ``freq`` [Hz] of the last 15 s, final burden ``mode``,
-        ``peak`` current [A].
+    **columns : sequence
+        Values of each variable at each point, all of the same length.
     """
-    i = r["i_a"]
-    final = r.window_mean("i_a", 5.0)
-    ptp, f = oscillation(r.t, i, T_END - 15.0)
-    return {"final": final, "mean20": r.window_mean("i_a", 20.0), "settle": settle_time(r.t, i, 0.05 * final, final),
-            "ptp": ptp, "freq": f, "mode": str(r.burden_mode[-1]), "peak": float(np.max(i))}
+
+    method = "points"
+
+    def __init__(self, **columns):
+        self.names = tuple(columns)
+        self.columns = {k: np.array(v, dtype=object if isinstance(v[0], str) else float) for k, v in columns.items()}
+
+    def __len__(self) -> int:
+        return len(self.columns[self.names[0]])
+
+    def samples(self) -> dict:
+        """Return the values of each variable at each point."""
+        return dict(self.columns)
+
+    def describe(self) -> dict:
+        """Return the values of each variable as text."""
+        return {k: "values " + ", ".join(f"{x:g}" if not isinstance(x, str) else x for x in v)
+                for k, v in self.columns.items()}
+
+
+# --- outputs of the sweep: measures of one macro-model run --------------------------------------
+def final(r) -> float:
+    """Mean current of the last 5 s [A]."""
+    return r.window_mean("i_a", 5.0)
+
+
+def mean20(r) -> float:
+    """Mean current of the last 20 s [A]."""
+    return r.window_mean("i_a", 20.0)
+
+
+def settle(r) -> float:
+    """Time after which the current stays within 5 % of its final value [s] (NaN: never)."""
+    f = final(r)
+    t = settle_time(r.t, r["i_a"], 0.05 * f, f)
+    return np.nan if t is None else t
+
+
+def ptp(r) -> float:
+    """Peak-to-peak current of the last 15 s [A]."""
+    return oscillation(r.t, r["i_a"], T_END - 15.0)[0]
+
+
+def freq(r) -> float:
+    """Frequency of the current oscillation of the last 15 s [Hz] (NaN: none)."""
+    f = oscillation(r.t, r["i_a"], T_END - 15.0)[1]
+    return np.nan if f is None else f
+
+
+def peak(r) -> float:
+    """Largest current [A]."""
+    return float(np.max(r["i_a"]))
+
+
+OUTPUTS = {f.__name__: f for f in (final, mean20, settle, ptp, freq, peak)}
 
 
 def main(out: Path = OUT) -> PaperTable:
@@ -102,16 +147,21 @@ def main(out: Path = OUT) -> PaperTable:
     PaperTable
         The comparison with the paper.
     """
-    base = resolve_gains(Parameters())  # the toolkit's designed gains for Table 1, fixed for all runs
-    runs = {}
-    for law in ("paper", "torque"):
-        for mu in MU_C:
-            p = base.replace(mu_c=mu, mu_s=round(mu + MU_GAP, 3), friction_law=law)
-            runs[law, mu] = simulate(p, "macro", t_end=T_END)
-    mu_fit = mu_c_for_current(base, I_PAPER)
-    fit = simulate(base.replace(mu_c=mu_fit, mu_s=mu_fit + MU_GAP), "macro", t_end=T_END)
-    m = {k: measure(r) for k, r in runs.items()}
-    mf = measure(fit)
+    table1 = Parameters()
+    mu_fit = mu_c_for_current(table1, I_PAPER)
+    # mu1..mu4 with both friction laws, then the pair fitted to 620 A; the gains designed for Table 1 throughout
+    keys = [(law, mu) for law in ("paper", "torque") for mu in MU_C] + [("paper", "fit")]
+    space = Pairs(friction_law=[law for law, _ in keys],
+                  mu_c=[mu_fit if mu == "fit" else mu for _, mu in keys],
+                  mu_s=[mu_fit + MU_GAP if mu == "fit" else round(mu + MU_GAP, 3) for _, mu in keys])
+    study = Study(space, OUTPUTS, model="macro", t_end=T_END, base=table1, name=STUDY)
+    table = study.run(executor="serial", progress=False).table
+    m = {k: row._asdict() for k, row in zip(keys, table.itertuples())}
+    mf = m.pop(("paper", "fit"))
+    base = study.controlled_base()  # Table 1 with the designed gains
+    runs = {k: simulate(p, "macro", t_end=T_END)  # the currents of the figure: the sweep keeps only the outputs
+            for k, p in zip(keys, study.parameter_sets())}
+    fit = runs.pop(("paper", "fit"))
 
     # --- figure -------------------------------------------------------------------------
     fig = Figure(figsize=(11, 8.5))

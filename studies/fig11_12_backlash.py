@@ -20,7 +20,8 @@ from matplotlib.figure import Figure
 
 from kilnctl import Parameters
 from kilnctl.report import PaperTable, window_peak
-from kilnctl.simulate import resolve_gains, simulate
+from kilnctl.simulate import simulate
+from kilnctl.sweep import Grid, Study
 
 STUDY = "fig11_12_backlash"
 OUT = Path(__file__).parent / "out" / STUDY
@@ -29,37 +30,69 @@ GAP_0 = (1.0, 0.5, 0.0)
 DX_FIG12 = 10  # mm, Fig. 12
 
 
-def startup(p: Parameters, t_ramp: float):
-    """Micro-model start-up to 1 s past the end of the ramp.
+def _t_ramp(r) -> float:
+    """End of the speed ramp [s]."""
+    return r.params.omega_ref / r.params.ramp_rate
 
-    Parameters
-    ----------
-    p : Parameters
-        Parameters with the backlash ``delta_x`` [m] and initial gap ``gap_0`` [-].
-    t_ramp : float
-        End of the speed ramp [s].
 
-    Returns
-    -------
-    Response
-        The run.
-    dict
-        ``peak`` stress during the ramp [Pa] and its time ``t_peak`` [s], stress ``at_ramp_end``
-        [Pa], mesh events ``n_mesh`` and separations ``n_sep``, first contact time ``t_contact``
-        [s] and closing speed ``v_impact`` [m/s], time of the last mesh event ``last_mesh`` [s].
-    """
-    r = simulate(p, "micro", t_end=t_ramp + 1.0)
-    sig_peak, t_peak = window_peak(r.t, r["sigma"], 0.0, t_ramp)
-    k_end = int(np.argmin(np.abs(r.t - t_ramp)))
-    mesh = [e for e in r.events if e.component == "mesh"]
-    first = next((e for e in mesh if e.kind == "contact"), None)
-    v_imp = None
-    if first is not None:
-        k = list(r.t).index(first.t)
-        v_imp = p.R_p * r["omega_pinion"][k] - p.R_o * r["omega_kiln"][k]
-    return r, {"peak": sig_peak, "t_peak": t_peak, "at_ramp_end": float(r["sigma"][k_end]), "n_mesh": len(mesh),
-               "n_sep": sum(e.kind == "separation" for e in mesh), "t_contact": first.t if first else None,
-               "v_impact": v_imp, "last_mesh": mesh[-1].t if mesh else None}
+def _mesh(r) -> list:
+    """Mesh events of a run."""
+    return [e for e in r.events if e.component == "mesh"]
+
+
+def _first_contact(r):
+    """First mesh contact event, or None."""
+    return next((e for e in _mesh(r) if e.kind == "contact"), None)
+
+
+# --- outputs of the sweep: functions of one micro-model start-up (NaN where there is no such event) ---
+def peak(r) -> float:
+    """Peak stress during the ramp [Pa]."""
+    return window_peak(r.t, r["sigma"], 0.0, _t_ramp(r))[0]
+
+
+def t_peak(r) -> float:
+    """Time of the peak stress during the ramp [s]."""
+    return window_peak(r.t, r["sigma"], 0.0, _t_ramp(r))[1]
+
+
+def at_ramp_end(r) -> float:
+    """Stress at the end of the ramp [Pa]."""
+    return float(r["sigma"][int(np.argmin(np.abs(r.t - _t_ramp(r))))])
+
+
+def n_mesh(r) -> float:
+    """Number of mesh events."""
+    return len(_mesh(r))
+
+
+def n_sep(r) -> float:
+    """Number of tooth separations."""
+    return sum(e.kind == "separation" for e in _mesh(r))
+
+
+def t_contact(r) -> float:
+    """Time of the first tooth contact [s]."""
+    first = _first_contact(r)
+    return first.t if first else np.nan
+
+
+def v_impact(r) -> float:
+    """Closing speed R_p omega_pinion - R_o omega_kiln at the first contact [m/s]."""
+    first, p = _first_contact(r), r.params
+    if first is None:
+        return np.nan
+    k = list(r.t).index(first.t)
+    return p.R_p * r["omega_pinion"][k] - p.R_o * r["omega_kiln"][k]
+
+
+def last_mesh(r) -> float:
+    """Time of the last mesh event [s]."""
+    mesh = _mesh(r)
+    return mesh[-1].t if mesh else np.nan
+
+
+OUTPUTS = {f.__name__: f for f in (peak, t_peak, at_ramp_end, n_mesh, n_sep, t_contact, v_impact, last_mesh)}
 
 
 def main(out: Path = OUT) -> PaperTable:
@@ -75,12 +108,17 @@ def main(out: Path = OUT) -> PaperTable:
     PaperTable
         The comparison with the paper.
     """
-    base = resolve_gains(Parameters())  # designed gains for Table 1
-    t_ramp = base.omega_ref / base.ramp_rate
-    res, resp = {}, {}
-    for g0 in GAP_0:
-        for mm in BACKLASH_MM:
-            resp[g0, mm], res[g0, mm] = startup(base.replace(delta_x=mm * 1e-3, gap_0=g0), t_ramp)
+    table1 = Parameters()
+    t_ramp = table1.omega_ref / table1.ramp_rate
+    # micro-model start-ups to 1 s past the end of the ramp, the gains designed for Table 1 at every point
+    study = Study(Grid({"gap_0": GAP_0, "delta_x": [mm * 1e-3 for mm in BACKLASH_MM]}), OUTPUTS, model="micro",
+                  t_end=t_ramp + 1.0, base=table1, name=STUDY)
+    table = study.run(executor="serial", progress=False).table
+    res = {(row.gap_0, round(row.delta_x * 1e3)): row._asdict() for row in table.itertuples()}  # key: mm
+    base = study.controlled_base()  # Table 1 with the designed gains
+    resp = {(g0, DX_FIG12): simulate(study.params_at({"gap_0": g0, "delta_x": DX_FIG12 * 1e-3}), "micro",
+                                     t_end=study.t_end)
+            for g0 in GAP_0}  # the transients of panels (b), (c): the sweep keeps only the outputs
 
     # --- figure -------------------------------------------------------------------------------
     fig = Figure(figsize=(11, 10))
@@ -114,7 +152,7 @@ def main(out: Path = OUT) -> PaperTable:
     bx.set_title(f"(b) Fig. 12: stress transient at {DX_FIG12} mm backlash, whole start-up", loc="left",
                  fontsize=10)
     bx.legend(fontsize=8, loc="upper right")
-    t_last = max(res[1.0, DX_FIG12]["last_mesh"] or 0.0, 1.0)
+    t_last = max(np.nan_to_num(res[1.0, DX_FIG12]["last_mesh"]), 1.0)
     cx.set_xlim(res[1.0, DX_FIG12]["t_contact"] - 0.1, t_last + 0.3)
     cx.set_title("(c) the same, zoomed on the engagement (shading: gap_0 = 1)", loc="left", fontsize=10)
     cx.set_xlabel("time [s]")
@@ -128,9 +166,9 @@ def main(out: Path = OUT) -> PaperTable:
     r8, r10 = res[1.0, 8], res[1.0, DX_FIG12]
     peaks = [res[1.0, mm]["peak"] / 1e6 for mm in BACKLASH_MM]
     tab.add("vibration excited at start-up, 10 mm", "none: gears engage slowly",
-            f"gap_0 = 1: {r10['n_mesh']} mesh events ({r10['n_sep']} separations), first contact at "
+            f"gap_0 = 1: {r10['n_mesh']:.0f} mesh events ({r10['n_sep']:.0f} separations), first contact at "
             f"{r10['t_contact']:.2f} s with {r10['v_impact'] * 1e3:.0f} mm/s; gap_0 = 0: "
-            f"{res[0.0, DX_FIG12]['n_mesh']} events", "differs",
+            f"{res[0.0, DX_FIG12]['n_mesh']:.0f} events", "differs",
             f"with the backlash open the motor runs up along the ramp with the pinion while the kiln stands still; "
             f"the motor referred to the kiln axis (J_m n^2 = {base.J_m * base.n ** 2:.3g} kg m^2) outweighs kiln and "
             f"burden (J_e = {base.J_e_eff:.3g} kg m^2), so at contact it kicks the kiln ahead through coupling and "

@@ -19,7 +19,8 @@ from matplotlib.figure import Figure
 
 from kilnctl import Parameters
 from kilnctl.report import PaperTable
-from kilnctl.simulate import resolve_gains, simulate
+from kilnctl.simulate import simulate
+from kilnctl.sweep import Grid, Study
 
 STUDY = "fig14_mass"
 OUT = Path(__file__).parent / "out" / STUDY
@@ -28,24 +29,22 @@ MASSES = (240e3, 360e3, 487e3, 580e3, 730e3, 974e3)  # kg: the paper's range; 48
 PAPER_RATIO = 2.2  # paper, Fig. 14: +100 % mass -> +120 % stress
 
 
-def steady(r) -> dict:
-    """Steady-state measures of one run.
+def mean_Pa(r) -> float:
+    """Mean tooth bending stress of the last 5 s [Pa] (a sweep output)."""
+    return r.window_mean("sigma", 5.0)
 
-    Parameters
-    ----------
-    r : Response
-        A micro-model run.
 
-    Returns
-    -------
-    dict
-        ``mean`` and ``max`` stress of the last 5 s [Pa], final burden ``mode``, ``i_peak``
-        current [A], ``limited``: whether the current limit was reached.
-    """
-    m = r.t >= r.t[-1] - 5.0
-    return {"mean": r.window_mean("sigma", 5.0), "max": float(np.max(r["sigma"][m])),
-            "mode": str(r.burden_mode[-1]), "i_peak": float(np.max(r["i_a"])),
-            "limited": bool(np.any(r.modes.get("current_limit", np.array(["free"])) != "free"))}
+def current_peak_A(r) -> float:
+    """Largest armature current of the run [A] (a sweep output)."""
+    return float(np.max(r["i_a"]))
+
+
+def limited(r) -> float:
+    """1 if the current limit was reached during the run, else 0 (a sweep output)."""
+    return float(np.any(r.modes.get("current_limit", np.array(["free"])) != "free"))
+
+
+OUTPUTS = {"mean": mean_Pa, "i_peak": current_peak_A, "limited": limited}
 
 
 def main(out: Path = OUT) -> PaperTable:
@@ -61,20 +60,27 @@ def main(out: Path = OUT) -> PaperTable:
     PaperTable
         The comparison with the paper.
     """
-    base = resolve_gains(Parameters())  # designed gains for Table 1, kept for every burden
-    runs, res = {}, {}
-    for scaled in (True, False):
-        for m in MASSES:
-            jv = base.J_v * m / base.m_v if scaled else base.J_v
-            runs[scaled, m] = simulate(base.replace(m_v=m, J_v=jv), "micro", t_end=T_END)
-            res[scaled, m] = steady(runs[scaled, m])
+    table1 = Parameters()
+    # burden = m_v / Table 1; the gains designed for Table 1 are kept for every burden (Study's default)
+    burden = [m / table1.m_v for m in MASSES]
+    scaled = Study(Grid({"burden": burden}), OUTPUTS, model="micro", t_end=T_END, base=table1,
+                   factors={"burden": ("m_v", "J_v")}, name=STUDY)  # J_v scaled with m_v
+    fixed = Study(Grid({"burden": burden}), OUTPUTS, model="micro", t_end=T_END, base=table1,
+                  factors={"burden": ("m_v",)}, name=STUDY)  # J_v held at Table 1
+    res = {}  # (J_v scaled, m_v) -> outputs
+    for is_scaled, st in ((True, scaled), (False, fixed)):
+        table = st.run(executor="serial", progress=False).table
+        res.update({(is_scaled, m): row._asdict() for m, row in zip(MASSES, table.itertuples())})
+    base = scaled.controlled_base()  # Table 1 with the designed gains
+    runs = {m: simulate(scaled.params_at({"burden": b}), "micro", t_end=T_END)
+            for m, b in zip(MASSES, burden)}  # the transients of panel (a): the sweep keeps only the outputs
 
     # --- figure --------------------------------------------------------------------------------
     fig = Figure(figsize=(11, 8.5))
     ax, bx = fig.subplots(2, 1)
     colors = dict(zip(MASSES, ("#c6dbef", "#9ecae1", "#6baed6", "k", "#2171b5", "#08306b")))
     for m in MASSES:
-        r = runs[True, m]
+        r = runs[m]
         ax.plot(r.t, r["sigma"] / 1e6, color=colors[m], lw=2.0 if m == base.m_v else 1.2,
                 label=f"m_v = {m / 1e3:.0f} t" + (" (Table 1)" if m == base.m_v else ""))
     ax.set_xlabel("time [s]")
