@@ -37,7 +37,7 @@ __all__ = ["simulate", "resolve_gains", "DEFAULT_DT"]
 
 #: a guard has crossed when it is below -GUARD_EPS (guards are scaled to order one), so a guard that
 #: starts on its boundary does not fire on round-off
-GUARD_EPS = 1e-9
+GUARD_EPS = 1e-7
 #: a scaled state beyond this is a runaway (the loop is unstable), reported as an error
 RUNAWAY = 1e6
 #: default output and guard-sampling step per model [s]

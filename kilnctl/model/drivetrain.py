@@ -177,6 +177,21 @@ class Mesh(Component):
             e.add_guard(Guard("back_separation", self.name, -ds / DS_SCALE, "gap"))
         e.add_output("ds", ds)
 
+    def sliding_mode(self, cycle):
+        """Resting contact: teeth touching with (almost) no relative speed and no force.
+
+        At a flank with zero relative velocity the gap and the contact mode can
+        switch into one another without time passing; the Filippov solution is
+        the teeth resting on that flank (contact, force k_e*deflection clipped at
+        zero), which the guards then leave as soon as the drive pulls them apart.
+        """
+        if "gap" in cycle:
+            if "contact" in cycle:
+                return "contact"
+            if "back" in cycle:
+                return "back"
+        return None
+
 
 @register
 class BendingStress(Component):

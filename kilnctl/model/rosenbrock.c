@@ -38,8 +38,9 @@ int kp_work(cint* sz_arg, cint* sz_res, cint* sz_iw, cint* sz_w);
 #define NMAX 64
 #define GMAX 64
 /* a guard has crossed when it is below -GUARD_EPS (guards are scaled to order one): a guard that
-   starts on its boundary does not fire on round-off */
-#define GUARD_EPS 1e-9
+   starts on its boundary does not fire on round-off or on
+   integration error below the default absolute tolerance (1e-8 of each state's scale) */
+#define GUARD_EPS 1e-7
 
 static const double GAM = 7.886751345948129e-01;
 static const double A21 = 1.267949192431123, A31 = 1.267949192431123, A32 = 0.0;
@@ -211,15 +212,21 @@ int kiln_run(int n, int ng, const double* P, double t0, double t_end, const doub
         for (int j = 0; j < ng; j++) {
             if (g_hi[j] < -GUARD_EPS) {
                 double a = t, fa = g0[j] > 0 ? g0[j] : 1e-300, b = t_hi, fb = g_hi[j];
-                int side = 0;
+                int side = 0, b_real = (t_hi == t1);  /* fb from a real step, or from the interpolant */
                 for (int it = 0; it < 100 && b - a > event_tol; it++) {
                     double m = b - fb * (b - a) / (fb - fa);
                     if (!(m > a && m < b)) m = 0.5 * (a + b);
                     if (ros_step(c, n, t, x, f0, J, ft, m - t, tmp, errv, W, piv)) { status = -2; goto done; }
                     if (call3(kg, c, tmp, m, gt)) { status = -2; goto done; }
                     if (gt[j] > 0) { a = m; fa = gt[j]; if (side == -1) fb *= 0.5; side = -1; }
-                    else { b = m; fb = gt[j]; if (side == 1) fa *= 0.5; side = 1; }
+                    else { b = m; fb = gt[j]; b_real = 1; if (side == 1) fa *= 0.5; side = 1; }
                     if (fb == 0.0) break;
+                }
+                if (!b_real) {
+                    /* seen only on the interpolant (e.g. near a tangency): a real step must confirm it */
+                    if (ros_step(c, n, t, x, f0, J, ft, b - t, tmp, errv, W, piv)) { status = -2; goto done; }
+                    if (call3(kg, c, tmp, b, gt)) { status = -2; goto done; }
+                    if (!(gt[j] < -GUARD_EPS)) continue;  /* false alarm: no crossing of this guard */
                 }
                 if (jbest < 0 || b < tbest) { tbest = b; jbest = j; }
             }
