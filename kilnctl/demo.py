@@ -100,12 +100,11 @@ def main(argv=None) -> int:
     print(f"  ({time.perf_counter() - t0:.1f} s)")
 
     # --- start-up ramp optimization --------------------------------------------------
-    if importlib.util.find_spec("kilnctl.optimize.demo_step") is not None:
-        t0 = _step("4. Start-up ramp that spares the girth gear (CasADi/IPOPT, verified on the hybrid plant)")
-        from .optimize.demo_step import run as run_optimize
+    t0 = _step("4. Start-up ramp that spares the girth gear (CasADi/IPOPT, verified on the hybrid plant)")
+    from .optimize.demo import demo_ramp
 
-        run_optimize(params, out)
-        print(f"  ({time.perf_counter() - t0:.1f} s)")
+    demo_ramp(out, params)
+    print(f"  ({time.perf_counter() - t0:.1f} s)")
 
     # --- diagnosis of the example measurement -----------------------------------------
     if importlib.util.find_spec("kilnctl.measure.demo_step") is not None:

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from ..errors import ModelError, close_matches_hint
 from . import drive, drivetrain, effects, kiln  # noqa: F401  (register the components)
+from . import ramps, smooth  # noqa: F401  (reference profiles and smoothed components for optimization)
 from .assembly import Plant, get_plant
 from .base import REGISTRY, Component, Guard, StateVar, register
 
@@ -71,9 +72,21 @@ def component_names(model: str = "macro", add=(), remove=()) -> tuple[str, ...]:
                 names.remove(rep)
         if nm not in names:
             names.append(nm)
+    return tuple(sorted(names, key=_rank))
+
+
+def _rank(name: str) -> float:
+    """Phase rank of a component: its place in ORDER; reference profiles (``ramp_*``) right after
+    ``ramp``, smoothed variants (``*_smooth``) at the place of the component they smooth, others
+    just before ``bending_stress``."""
     rank = {nm: i for i, nm in enumerate(ORDER)}
-    last = rank["bending_stress"]
-    return tuple(sorted(names, key=lambda nm: rank.get(nm, last - 0.5)))
+    if name in rank:
+        return rank[name]
+    if name.startswith("ramp_"):
+        return rank["ramp"] + 0.5
+    if name.endswith("_smooth") and name[: -len("_smooth")] in rank:
+        return rank[name[: -len("_smooth")]]
+    return rank["bending_stress"] - 0.5
 
 
 def describe_components() -> list[dict]:

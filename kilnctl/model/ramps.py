@@ -32,7 +32,9 @@ Profiles
 
 Examples
 --------
->>> import casadi as ca
+>>> import abc
+
+import casadi as ca
 >>> from kilnctl.model.ramps import pwl_reference
 >>> t = ca.SX.sym("t")
 >>> ev, evd, t_end = pwl_reference(t, [50.0], 500.0)
@@ -41,6 +43,8 @@ Examples
 """
 
 from __future__ import annotations
+
+import abc
 
 import casadi as ca
 
@@ -221,7 +225,7 @@ def scurve_reference(t, a, j, omega_ref):
     return e_v, ev_dot, t_end
 
 
-class _ProfileRamp(Component):
+class _ProfileRamp(Component, abc.ABC):
     """Common part of the profile components: override the reference, constant states."""
 
     requires = ("ramp",)
@@ -232,9 +236,9 @@ class _ProfileRamp(Component):
         for name, unit, scale, doc in self.profile_states:
             spec.add_state(name, unit, scale, doc + " (constant: its rate is zero)")
 
+    @abc.abstractmethod
     def reference(self, e):
         """Return (e_v, ev_dot) [rpm, rpm/s] for the equations ``e``."""
-        raise NotImplementedError
 
     def signals(self, e, mode):
         e.sig["e_v"], e.sig["ev_dot"] = self.reference(e)
