@@ -81,7 +81,9 @@ class ChannelComparison:
                           "fraction_outside": self.whiteness["fraction_outside"]},
             "xcorr": {k: {"band": v["band"], "n_outside": v["n_outside"], "fraction_outside": v["fraction_outside"],
                           "max_abs": float(np.max(np.abs(v["r"])))} for k, v in self.xcorr.items()},
-            "spectrum": {"dominant_hz": self.spectrum["dominant_hz"], "peak_ratio": _num(self.spectrum["peak_ratio"])},
+            "spectrum": {"dominant_hz": self.spectrum["dominant_hz"], "peak_ratio": _num(self.spectrum["peak_ratio"]),
+                         "narrowband_hz": self.spectrum["narrowband_hz"],
+                         "narrowband_ratio": _num(self.spectrum["narrowband_ratio"])},
             "failing": [{k: v for k, v in f.items()} for f in self.failing],
         }
 

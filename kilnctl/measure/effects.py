@@ -25,7 +25,8 @@ import numpy as np
 from ..errors import ModelError, close_matches_hint
 from ..params import SPECS, Parameters
 
-__all__ = ["FreeParameter", "Effect", "CATALOGUE", "BASE_PARAMETERS", "free_parameter", "effect_components"]
+__all__ = ["FreeParameter", "Effect", "CATALOGUE", "BASE_PARAMETERS", "free_parameter", "effect_components",
+           "grid_starts"]
 
 
 @dataclass(frozen=True)
@@ -141,12 +142,20 @@ class Effect:
         The residual pattern it explains.
     starts : callable
         ``starts(params, measurement) -> list of dict``: initial guesses
-        (the best of them by cost is the starting point).
+        added to the grid of :func:`grid_starts` (the best of all by cost is
+        the starting point of the local fit).
     plausible : dict
         Range of each parameter in real drives [unit], used by the synthetic
         records of the tests; not a fitting bound.
     notes : str
         How it is handled (e.g. the micro model for backlash).
+    horizons : tuple of float or 'after_first_failure'
+        Growing fitting horizons (fractions of the record) used when it is
+        refitted (see :meth:`~kilnctl.measure.calibrate.Calibration.fit`);
+        ``after_first_failure``: first up to 1 s after the current model's
+        first failing interval, then halfway to the end, then all.
+    grid_points : int
+        Points of the coarse start grid per parameter.
     """
 
     name: str
@@ -159,6 +168,8 @@ class Effect:
     starts: Callable = field(repr=False, default=lambda params, m: [{}])
     plausible: dict = field(default_factory=dict)
     notes: str = ""
+    horizons: tuple = (1.0,)
+    grid_points: int = 24
 
     def applicable(self, params: Parameters, model: str) -> str | None:
         """Return None if the effect can be added to this base, else the reason it cannot.
@@ -188,6 +199,59 @@ class Effect:
                 "plausible": {k: list(v) for k, v in self.plausible.items()}, "notes": self.notes}
 
 
+def grid_starts(parameters, n: int = 24) -> list[dict]:
+    """A coarse grid over an effect's parameters, for the global phase of a refit.
+
+    ``log`` parameters: geometric between max(lower, typical/100) and
+    min(upper, 100 typical); ``lin``: from the lower bound to
+    min(upper, 10 typical); ``polar``: amplitudes typical/10 ... 10 typical at
+    eight phases.  Two parameters are crossed on a coarser grid.
+
+    Parameters
+    ----------
+    parameters : sequence of FreeParameter
+        The effect's parameters.
+    n : int, default 24
+        Points per parameter for one parameter (about sqrt(4n) each for two).
+
+    Returns
+    -------
+    list of dict
+        Parameter values [units of each].
+    """
+    if not parameters or n <= 0:
+        return []
+    axes = []
+    per = n if len(parameters) == 1 else max(4, int(round(math.sqrt(4 * n))))
+    for fp in parameters:
+        if fp.kind == "polar":
+            amps = np.geomspace(fp.typical / 10, min(fp.upper, 10 * fp.typical), 6)
+            axes.append([{fp.name: float(a), fp.partner: float(ph)} for a in amps
+                         for ph in np.arange(8) * (2 * math.pi / 8)])
+        elif fp.kind == "log":
+            lo, hi = max(fp.lower, fp.typical / 100), min(fp.upper, fp.typical * 100)
+            axes.append([{fp.name: float(v)} for v in np.geomspace(lo, hi, per)])
+        else:
+            hi = min(fp.upper, 10 * fp.typical)
+            axes.append([{fp.name: float(v)} for v in np.linspace(fp.lower, hi, per)])
+    out = [{}]
+    for ax in axes:
+        out = [dict(a, **b) for a in out for b in ax]
+    return out
+
+
+def _compliance_starts(params) -> list[dict]:
+    """k_po on a fine geometric grid, C_po from damping ratios of the torsional mode."""
+    j_motor = (params.J_m + params.J_m2) * params.n ** 2  # motor side referred to the kiln (upper bound)
+    j_kiln = params.J_e_eff
+    j_eff = j_motor * j_kiln / (j_motor + j_kiln)
+    out = []
+    for k in np.geomspace(1e6, 1e11, 50):
+        for zeta in (0.03, 0.1, 0.3, 1.0):
+            out.append({"k_po": float(k), "C_po": float(min(1e10, max(1e3, 2 * zeta * math.sqrt(k * j_eff))))})
+    return out
+
+
 def _peak_current(m) -> float:
     """A robust peak of the measured current [A] (99.5th percentile of |i|)."""
     return float(np.percentile(np.abs(m.current), 99.5)) if m is not None else 1000.0
@@ -212,7 +276,8 @@ CATALOGUE: dict[str, Effect] = {e.name: e for e in [
         (FreeParameter("I_max", 10.0, 20000.0, "log", 1000.0),),
         "the measured current flat-topped at a plateau the model exceeds, while the speed lags the reference; "
         "the model's current peak is above the measured one",
-        starts=lambda params, m: [{"I_max": 1.01 * _peak_current(m)}, {"I_max": params.I_max}],
+        starts=lambda params, m: [{"I_max": f * _peak_current(m)} for f in (0.9, 0.95, 0.98, 1.0, 1.02, 1.05, 1.1)]
+        + [{"I_max": params.I_max}],
         plausible={"I_max": (0.9, 0.98)},
         notes="current_limit is in both base models with the setup's I_max; as a candidate, I_max is freed. "
               "Synthetic records draw I_max as a fraction of the plant's peak current without the limit."),
@@ -224,10 +289,10 @@ CATALOGUE: dict[str, Effect] = {e.name: e for e in [
         (FreeParameter("k_po", 1e6, 1e12, "log", 7.012e8), FreeParameter("C_po", 1e3, 1e10, "log", 19.9e6)),
         "a damped oscillation of the current at the torsional mode (about 1.5 Hz with Table 1) after each "
         "change of torque: ramp start, ramp end, burden breakaway",
-        starts=lambda params, m: [{"k_po": params.k_po, "C_po": params.C_po},
-                                  {"k_po": params.k_po / 10, "C_po": params.C_po / 10},
-                                  {"k_po": params.k_po / 100, "C_po": params.C_po / 100}],
-        plausible={"k_po": (5e7, 5e8), "C_po": (2e6, 2e7)}),
+        starts=lambda params, m: _compliance_starts(params),
+        plausible={"k_po": (5e7, 5e8), "C_po": (2e6, 2e7)}, grid_points=0,
+        notes="started from a grid in stiffness (fine: the mode frequency must match) times damping ratios "
+              "0.03-1 of the mode between the motor side and the kiln."),
     Effect(
         "backlash",
         "Play between girth gear and pinion: at start-up the motor turns freely until the teeth meet, "
@@ -237,7 +302,7 @@ CATALOGUE: dict[str, Effect] = {e.name: e for e in [
         "in the first second or so: current below the model while the motor turns free, then a spike "
         "when the teeth meet; nothing at steady state",
         starts=lambda params, m: [{"delta_x": 0.004}, {"delta_x": 0.008}, {"delta_x": 0.016}],
-        plausible={"delta_x": (0.004, 0.016)},
+        plausible={"delta_x": (0.004, 0.016)}, grid_points=80,
         notes="needs the micro model (coupling, pinion, mesh), which has backlash; the macro model has none. "
               "The candidate runs the micro model with the base's calibrated values and fits delta_x; the "
               "evidence is against the macro base (the micro model with delta_x = 0 is close to it). Only the "
@@ -250,7 +315,9 @@ CATALOGUE: dict[str, Effect] = {e.name: e for e in [
         "a saw-tooth in the current at steady speed: rising while the burden sticks, dropping at each "
         "breakaway, with a period of seconds; the paper's law gives small sliding oscillations",
         notes="an option of the burden model, not a component: no new parameter; mu_c and mu_s are refitted "
-              "(their meaning changes with the law)."),
+              "(their meaning changes with the law), first on the record up to the end of the current model's "
+              "first failing interval, then on all of it: the cost of a long run of stick-slip cycles is rugged.",
+        horizons="after_first_failure"),
     Effect(
         "speed_sensor_lag",
         "The controller sees the motor speed through a first-order lag (tacho filter, encoder averaging).",

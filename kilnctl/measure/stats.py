@@ -132,9 +132,12 @@ def residual_spectrum(e, fs: float, seconds: float = 10.0) -> dict:
     Returns
     -------
     dict
-        ``f`` [Hz], ``psd`` [unit^2/Hz], ``dominant_hz`` (largest peak above
-        the lowest two bins), ``peak_ratio`` (that peak over the median PSD:
-        about 1-10 for smooth coloured noise, far more for an oscillation).
+        ``f`` [Hz], ``psd`` [unit^2/Hz], ``dominant_hz`` (largest PSD above
+        the lowest two bins), ``peak_ratio`` (that PSD over the median PSD),
+        ``narrowband_hz`` and ``narrowband_ratio``: the bin that stands out
+        most from its neighbours (PSD over the larger of the medians of the
+        8 bins on either side, the adjacent ones excluded).  Smooth (coloured) noise gives a
+        narrow-band ratio of a few units; an oscillation gives far more.
     """
     from scipy.signal import welch
 
@@ -144,8 +147,18 @@ def residual_spectrum(e, fs: float, seconds: float = 10.0) -> dict:
     lo = 2 if f.size > 4 else 1
     k = lo + int(np.argmax(psd[lo:]))
     med = float(np.median(psd[lo:])) if f.size > lo else float(psd[k])
+    best, kb = 0.0, k
+    for j in range(lo, f.size):
+        left, right = psd[max(lo, j - 9): max(lo, j - 1)], psd[j + 2: j + 10]
+        if left.size >= 2 and right.size >= 2:
+            # against the higher side: a sloping (coloured) spectrum is no peak
+            m = max(float(np.median(left)), float(np.median(right)))
+            r = psd[j] / m if m > 0 else math.inf
+            if r > best:
+                best, kb = r, j
     return {"f": f, "psd": psd, "dominant_hz": float(f[k]),
-            "peak_ratio": float(psd[k] / med) if med > 0 else math.inf}
+            "peak_ratio": float(psd[k] / med) if med > 0 else math.inf,
+            "narrowband_hz": float(f[kb]), "narrowband_ratio": float(best)}
 
 
 def robust_sigma(e) -> float:

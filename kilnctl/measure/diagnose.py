@@ -1,0 +1,824 @@
+"""Diagnose which physical effect the model is missing, from a measured start-up.
+
+The procedure (``docs/tutorial_diagnose.md``):
+
+1. calibrate the base model (``mu_c, mu_s, m_v`` by default) on the whole
+   record: the **baseline**;
+2. split the record into a fitting part and a held-out part
+   (:func:`~kilnctl.measure.calibrate.holdout_masks`);
+3. for every candidate of the :data:`~kilnctl.measure.effects.CATALOGUE`,
+   refit the model with the effect added, the effect's parameters and the
+   base ones together, on the fitting part;
+4. a candidate is **supported** when both its BIC falls by more than
+   ``min_delta_bic`` and its fit on the held-out part improves by more than
+   ``min_holdout_gain`` percent.  Under coloured measurement noise BIC alone
+   picks spurious effects; a spurious effect fits the noise of the fitting
+   part and gains nothing on the held-out part;
+5. add the supported candidate with the lowest BIC, and repeat (greedy) until
+   no candidate is supported;
+6. refit the final structure on the whole record, and describe what is left
+   of the residual (dominant frequency, correlation with the kiln angle,
+   speed, acceleration, current) when it still has structure.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import KilnctlError, ModelError, NotFittedError, close_matches_hint
+from ..params import SPECS, Parameters
+from .calibrate import Calibration, holdout_masks
+from .compare import Comparison, compare_run
+from .effects import CATALOGUE, effect_components, grid_starts
+from .io import Measurement
+from .runner import CHANNELS, fixed_gains, kiln_angle
+from .stats import failing_intervals, residual_spectrum, robust_sigma
+
+__all__ = ["Diagnosis", "CandidateResult", "residual_signature", "DEFAULT_CALIBRATE"]
+
+#: a residual spectral peak this many times its neighbours is an oscillation the model misses
+NARROWBAND_RATIO = 10.0
+#: below this share of an effect in the held-out part, the held-out test cannot judge it (see Diagnosis)
+MIN_HELDOUT_SHARE = 0.1
+#: base parameters calibrated by default: the paper's friction study (Fig. 4) plus the burden mass
+DEFAULT_CALIBRATE = ("mu_c", "mu_s", "m_v")
+
+
+@dataclass
+class CandidateResult:
+    """One candidate effect refitted on the fitting part of the record.
+
+    Attributes
+    ----------
+    effect : str
+        Catalogue name.
+    delta_bic : float
+        BIC of the candidate minus BIC of the current model (fitting part);
+        negative favours the candidate.
+    holdout_gain : float
+        Reduction of the weighted squared error on the held-out part [%]
+        (positive: the candidate predicts unseen samples better).
+    fit_percent : dict
+        Fit % per channel on the fitting part.
+    holdout_fit_percent : dict
+        Fit % per channel on the held-out part.
+    parameters : dict
+        Fitted values with ``value``, ``stderr``, ``unit`` (effect and base).
+    on_bound, not_identifiable : list of str
+        Flags of the fitted parameters.
+    supported : bool
+        Both criteria met.
+    reason : str
+        Why it is (not) supported.
+    wall_s : float
+        Time the refit took [s].
+    heldout_share : float
+        Share of the candidate's change to the (scaled) model output that
+        falls in the held-out part [-].
+    delta_bic_corrected : float
+        delta_bic with each channel's log-likelihood ratio divided by the
+        variance inflation 1 + 2 sum(rho_k) of its residual autocorrelation.
+    """
+
+    effect: str
+    delta_bic: float
+    holdout_gain: float
+    fit_percent: dict
+    holdout_fit_percent: dict
+    parameters: dict
+    on_bound: list
+    not_identifiable: list
+    supported: bool
+    reason: str
+    wall_s: float
+    calibration: Calibration | None = field(default=None, repr=False)
+    heldout_share: float = math.nan
+    delta_bic_corrected: float = math.nan
+
+    def to_dict(self) -> dict:
+        """Return the result as a JSON-ready dictionary."""
+        return {"effect": self.effect, "delta_bic": _num(self.delta_bic), "holdout_gain_percent": _num(self.holdout_gain),
+                "fit_percent": {k: _num(v) for k, v in self.fit_percent.items()},
+                "holdout_fit_percent": {k: _num(v) for k, v in self.holdout_fit_percent.items()},
+                "parameters": {k: {"value": _num(v["value"]), "stderr": _num(v["stderr"]), "unit": v["unit"]}
+                               for k, v in self.parameters.items()},
+                "on_bound": list(self.on_bound), "not_identifiable": list(self.not_identifiable),
+                "supported": self.supported, "reason": self.reason, "wall_s": self.wall_s,
+                "heldout_share": _num(self.heldout_share), "delta_bic_corrected": _num(self.delta_bic_corrected)}
+
+
+def _num(v):
+    return None if v is None or not math.isfinite(v) else float(v)
+
+
+def _unit(name):
+    return SPECS[name].unit if name in SPECS else ""
+
+
+class Diagnosis:
+    """Find the physical effects a model is missing from a measured record.
+
+    Parameters
+    ----------
+    params : Parameters, optional
+        Setup of the experiment (defaults: the paper's Table 1); gains are
+        fixed once.
+    calibrate : sequence of str, default ('mu_c', 'mu_s', 'm_v')
+        Base parameters calibrated with every structure.
+    candidates : sequence of str, optional
+        Catalogue effects to try (default: all that apply to the base).
+    model : {'macro', 'micro'}, default 'macro'
+        Base model.
+    holdout : {'blocks', 'tail'}, default 'blocks'
+        How the held-out part is chosen (see
+        :func:`~kilnctl.measure.calibrate.holdout_masks`).  ``tail`` holds
+        out the last 30 % of the record, which in a start-up holds only the
+        steady state: effects seen during the ramp then gain nothing there.
+    holdout_fraction : float, default 0.3
+        Share of the record held out [-].
+    min_delta_bic : float, default 10.0
+        A candidate must lower BIC by more than this [-] ("very strong"
+        evidence on Kass and Raftery's scale).
+    min_holdout_gain : float, default 2.0
+        ... and lower the held-out weighted squared error by more than this [%].
+    max_effects : int, default 3
+        At most this many effects are added.
+    t0 : float, optional
+        Start of the experiment in record time [s].
+    max_nfev : int, default 60
+        Optimizer evaluations per refit.
+    n_local : int, default 3
+        Local fits per candidate, from the best starting points of its grid
+        that lie apart (see :meth:`Calibration.fit`).
+
+    Attributes
+    ----------
+    baseline_ : dict
+        Fit % per channel of the calibrated base model on the whole record.
+    base_calibration_ : Calibration
+        That calibration.
+    rounds_ : list of list of CandidateResult
+        Candidates of each greedy round, ranked (supported first, by delta BIC).
+    ranking_ : list of CandidateResult
+        The first round: every candidate against the calibrated base.
+    selected_ : list of str
+        Effects added, in order.
+    final_ : dict
+        Fit % per channel of the final model on the whole record.
+    final_calibration_ : Calibration
+        The final model's calibration on the whole record.
+    comparison_base_, comparison_final_ : Comparison
+        Comparisons of the base and final models with the record.
+    unexplained_ : dict or None
+        Signature of what the final model still misses, or None.
+    wall_s_ : float
+        Run time [s].
+    """
+
+    def __init__(self, params: Parameters | None = None, calibrate=DEFAULT_CALIBRATE, candidates=None, *,
+                 model: str = "macro", holdout: str = "blocks", holdout_fraction: float = 0.3,
+                 min_delta_bic: float = 10.0, min_holdout_gain: float = 2.0, max_effects: int = 3,
+                 t0: float | None = None, max_nfev: int = 60, n_local: int = 3):
+        self.params = Parameters() if params is None else params
+        self.calibrate = tuple(calibrate)
+        if candidates is not None:
+            for c in candidates:
+                if c not in CATALOGUE:
+                    raise ModelError(f"unknown candidate effect {c!r}: {close_matches_hint(c, CATALOGUE)}")
+        self.candidates = tuple(CATALOGUE) if candidates is None else tuple(candidates)
+        self.model = model
+        self.holdout = holdout
+        self.holdout_fraction = holdout_fraction
+        self.min_delta_bic = min_delta_bic
+        self.min_holdout_gain = min_holdout_gain
+        self.max_effects = max_effects
+        self.t0 = t0
+        self.max_nfev = max_nfev
+        self.n_local = n_local
+
+    # --- structure of a model: base model + effects ------------------------------------
+    def _structure(self, params, effects):
+        """(model, components, params with options, free parameters) of base + effects."""
+        model = self.model
+        for e in effects:
+            if CATALOGUE[e].model is not None:
+                model = CATALOGUE[e].model
+        comps, p = effect_components(effects, params, model=model)
+        free = list(self.calibrate)
+        for e in effects:
+            free += [fp for fp in CATALOGUE[e].parameters if fp.name not in free]
+        return model, comps, p, free
+
+    def _calibrate(self, m, params, effects, scales, mask, init, starts=(), experiment=None,
+                   first_failure=None, new_effect=None) -> Calibration:
+        model, comps, p, free = self._structure(params, effects)
+        cal = Calibration(p, free, model=model, effects=comps, scales=scales, t0=self.t0, max_nfev=self.max_nfev)
+        horizons = [1.0]
+        hz = CATALOGUE[new_effect].horizons if new_effect else (1.0,)
+        if hz == "after_first_failure":
+            if first_failure is not None:
+                h1 = min(1.0, max(0.3, first_failure))
+                horizons = sorted({h1, 0.5 * (h1 + 1.0), 1.0})
+        else:
+            horizons = sorted(set(hz) | {1.0})
+        return cal.fit(m, mask=mask, init=init, starts=list(starts), experiment=experiment, horizons=horizons,
+                       n_local=self.n_local if new_effect else 1)
+
+    @staticmethod
+    def _first_failure(m, cal, exp):
+        """End of the first failing interval of a calibrated model, + 1 s, as a fraction of the record."""
+        active = m.t >= exp.t0 - 1e-9
+        t = m.t[active]
+        e = m.current[active] - cal.run_.outputs["current_A"]
+        iv = failing_intervals(t, e)
+        if not iv:
+            return None
+        return (t[iv[0][1]] + 1.0 - exp.t0) / (t[-1] - exp.t0)
+
+    # --- the procedure ----------------------------------------------------------------------
+    def fit(self, measurement: Measurement, progress=None) -> "Diagnosis":
+        """Run the diagnosis on a record.
+
+        Parameters
+        ----------
+        measurement : Measurement
+            The measured start-up.
+        progress : callable, optional
+            Called with a line of text at each step (e.g. ``print``).
+
+        Returns
+        -------
+        Diagnosis
+            ``self``, fitted.
+        """
+        say = progress or (lambda s: None)
+        wall0 = time.perf_counter()
+        params = fixed_gains(self.params)
+        exp = measurement.experiment(params, t0=self.t0)
+        m = measurement
+        # 1. baseline: the base model calibrated on the whole record
+        base = Calibration(params, self.calibrate, model=self.model, t0=self.t0,
+                           max_nfev=self.max_nfev).fit(m, experiment=exp, starts=_base_starts(params))
+        say(f"baseline: {_fmt_fit(base.fit_percent_)} ({base.nfev_} runs)")
+        # residual scales for the comparison of structures: the base's residual RMS per channel
+        # (each channel weighted by its own error level, as the BIC's likelihood does)
+        active = m.t >= exp.t0 - 1e-9
+        scales = {}
+        for c in CHANNELS:
+            e = m.channels[c][active] - base.run_.outputs[c]
+            scales[c] = max(float(np.sqrt(np.mean(e ** 2))), 1e-3 * float(np.std(m.channels[c][active])), 1e-12)
+        train, test = holdout_masks(m, self.holdout, self.holdout_fraction, t0=exp.t0)
+        current = self._calibrate(m, params, (), scales, train, base.values_, experiment=exp)
+        selected: list[str] = []
+        rounds = []
+        while len(selected) < self.max_effects:
+            results = []
+            for name in self.candidates:
+                if name in selected:
+                    continue
+                eff = CATALOGUE[name]
+                why = eff.applicable(params, self.model)
+                if why is not None or (eff.model is not None and any(CATALOGUE[s].model not in (None, eff.model)
+                                                                     for s in selected)):
+                    continue
+                results.append(self._try(m, params, selected, name, current, scales, train, test, exp))
+                r = results[-1]
+                say(f"  {name:<22} dBIC {r.delta_bic:+10.1f}  held-out gain {r.holdout_gain:+6.1f} %  "
+                    f"{'supported' if r.supported else '-'}")
+            results.sort(key=lambda r: (not r.supported, r.delta_bic if math.isfinite(r.delta_bic) else math.inf))
+            rounds.append(results)
+            if not results or not results[0].supported:
+                break
+            best = results[0]
+            selected.append(best.effect)
+            current = best.calibration
+            say(f"added {best.effect}")
+        # final model on the whole record
+        if selected:
+            final = self._calibrate(m, params, tuple(selected), "std", None, current.values_, experiment=exp)
+        else:
+            final = base
+        self.base_calibration_ = base
+        self.final_calibration_ = final
+        self.baseline_ = dict(base.fit_percent_)
+        self.final_ = dict(final.fit_percent_)
+        self.rounds_ = rounds
+        self.ranking_ = rounds[0] if rounds else []
+        self.selected_ = selected
+        self.experiment_ = exp
+        self.comparison_base_ = compare_run(m, base.run_, exp, model=self.model, params=base.params_)
+        fm, fcomps, _, _ = self._structure(params, tuple(selected))
+        self.comparison_final_ = compare_run(m, final.run_, exp, model=fm, effects=tuple(selected),
+                                             params=final.params_)
+        self.signature_ = residual_signature(self.comparison_final_, params.n)
+        self.unexplained_ = self.signature_ if self.signature_["structured"] else None
+        self.measurement_ = m
+        self.wall_s_ = time.perf_counter() - wall0
+        say(f"final: {_fmt_fit(self.final_)} with {', '.join(selected) or 'no effect added'} "
+            f"({self.wall_s_:.1f} s)")
+        return self
+
+    def _try(self, m, params, selected, name, current, scales, train, test, exp) -> CandidateResult:
+        eff = CATALOGUE[name]
+        effects = tuple(selected) + (name,)
+        t_start = time.perf_counter()
+        init = dict(current.values_)
+        model, comps, p, free = self._structure(params, effects)
+        # global phase: a coarse grid over the effect's parameters (base at its calibrated values),
+        # since output-error costs of impacts and stick-slip cycles have many local minima
+        effect_starts = grid_starts(eff.parameters, eff.grid_points) + list(eff.starts(p, m))
+        if name == "torque_friction_law":
+            # the law changes what mu_s means.  The first breakaway (set by mu_s alone) is sharp, so the cost
+            # has a narrow valley along mu_s = const: a fine grid in mu_s, a coarse one in mu_c
+            mu_c = init.get("mu_c", p.mu_c)
+            effect_starts = [{"mu_c": f * mu_c, "mu_s": f * mu_c * r} for f in (0.85, 0.92, 1.0, 1.08, 1.15)
+                             for r in np.geomspace(1.02, 2.2, 80)]
+        # the base values from the current model and from the setup: the current model's calibration may sit
+        # in a regime (e.g. of the burden friction) that only made up for the missing effect
+        setup_base = {k: float(params[k]) for k in self.calibrate if k in init}
+        variants = [{}, setup_base] if any(abs(setup_base[k] - init[k]) > 1e-9 * abs(init[k]) for k in setup_base) \
+            else [{}]
+        starts = [dict(v, **g) for v in variants for g in (effect_starts or [{}])]
+        try:
+            cal = self._calibrate(m, params, effects, scales, train, init, starts, experiment=exp,
+                                  first_failure=self._first_failure(m, current, exp), new_effect=name)
+        except KilnctlError as exc:
+            return CandidateResult(name, math.inf, -math.inf, {}, {}, {}, [], [], False,
+                                   f"could not be fitted: {exc}", time.perf_counter() - t_start)
+        dbic = cal.bic_ - current.bic_
+        active = m.t >= exp.t0 - 1e-9
+        te = test[active]
+
+        def sse(run):
+            return sum(float(np.sum(((m.channels[c][active][te] - run.outputs[c][te]) / scales[c]) ** 2))
+                       for c in CHANNELS)
+
+        gain = 100.0 * (1.0 - sse(cal.run_) / max(sse(current.run_), 1e-300))
+        from .stats import fit_percent
+
+        hfit = {c: fit_percent(m.channels[c][active][te], cal.run_.outputs[c][te]) for c in CHANNELS}
+        # how much of the candidate's change to the model output falls in the held-out part
+        change = {c: ((cal.run_.outputs[c] - current.run_.outputs[c]) / scales[c]) ** 2 for c in CHANNELS}
+        total = sum(float(v.sum()) for v in change.values())
+        seen = sum(float(v[te].sum()) for v in change.values()) / total if total > 0 else 0.0
+        dbic_corr = _corrected_delta_bic(m, cal, current, exp, train)
+        ok_bic = dbic < -self.min_delta_bic
+        if seen >= MIN_HELDOUT_SHARE:
+            ok_gain = gain > self.min_holdout_gain
+            why_gain = f"held-out gain {gain:+.1f} % {'>' if ok_gain else '<='} {self.min_holdout_gain:g} %"
+        else:  # the held-out part does not see the effect: judge by the noise-corrected BIC, and no held-out loss
+            ok_gain = gain > -self.min_holdout_gain and dbic_corr < -self.min_delta_bic
+            why_gain = (f"the held-out part holds only {100 * seen:.0f} % of the effect: BIC corrected for residual "
+                        f"autocorrelation {dbic_corr:+.1f}, held-out gain {gain:+.1f} %")
+        if ok_bic and ok_gain:
+            reason = "BIC and held-out fit both improve" if seen >= MIN_HELDOUT_SHARE else "supported: " + why_gain
+        elif not ok_bic:
+            reason = f"BIC does not improve enough (dBIC {dbic:+.1f} >= {-self.min_delta_bic:g})"
+        else:
+            reason = f"BIC improves but not out of sample ({why_gain}): likely fitting noise"
+        pars = {k: {"value": cal.values_[k], "stderr": cal.stderr_[k], "unit": _unit(k)} for k in cal.names_}
+        return CandidateResult(name, float(dbic), float(gain), dict(cal.fit_percent_), hfit, pars,
+                               list(cal.on_bound_), list(cal.not_identifiable_), ok_bic and ok_gain, reason,
+                               time.perf_counter() - t_start, cal, float(seen), float(dbic_corr))
+
+    # --- estimator API ------------------------------------------------------------------------
+    def _check_fitted(self):
+        if not hasattr(self, "selected_"):
+            raise NotFittedError("this Diagnosis is not fitted yet: call fit(measurement) first")
+
+    def predict(self, measurement: Measurement | None = None) -> dict:
+        """Outputs of the final model at the measured times.
+
+        Parameters
+        ----------
+        measurement : Measurement, optional
+            Record (default: the diagnosed one).
+
+        Returns
+        -------
+        dict of str to ndarray
+            ``current_A`` [A], ``speed_rpm`` [rpm], ...
+        """
+        self._check_fitted()
+        return self.final_calibration_.predict(measurement)
+
+    def score(self, measurement: Measurement | None = None) -> float:
+        """Scaled fit % of the final model (see :meth:`Calibration.score`).
+
+        Parameters
+        ----------
+        measurement : Measurement, optional
+            Record (default: the diagnosed one).
+
+        Returns
+        -------
+        float
+        """
+        self._check_fitted()
+        return self.final_calibration_.score(measurement)
+
+    def to_dict(self) -> dict:
+        """Return the diagnosis as a JSON-ready dictionary.
+
+        Returns
+        -------
+        dict
+            ``baseline`` (fit % per channel), ``ranking`` (first round, per
+            candidate: ``effect``, ``delta_bic``, ``fit_percent``,
+            ``parameters`` with standard errors, ``on_bound`` ...),
+            ``rounds`` (every round), ``selected``, ``final`` (fit % per
+            channel), ``final_parameters``, ``unexplained`` (residual
+            signature or null), ``residual_signature``, ``experiment``,
+            ``settings``.
+        """
+        self._check_fitted()
+        fc = self.final_calibration_
+        return {
+            "source": self.measurement_.source,
+            "baseline": {k: _num(v) for k, v in self.baseline_.items()},
+            "baseline_parameters": _params_dict(self.base_calibration_),
+            "ranking": [r.to_dict() for r in self.ranking_],
+            "rounds": [[r.to_dict() for r in rnd] for rnd in self.rounds_],
+            "selected": list(self.selected_),
+            "final": {k: _num(v) for k, v in self.final_.items()},
+            "final_parameters": _params_dict(fc),
+            "unexplained": _jsonable(self.unexplained_),
+            "residual_signature": _jsonable(self.signature_),
+            "failing_before": self.comparison_base_.failing,
+            "failing_after": self.comparison_final_.failing,
+            "experiment": self.experiment_.to_dict(),
+            "settings": {"calibrate": list(self.calibrate), "candidates": list(self.candidates), "model": self.model,
+                         "holdout": self.holdout, "holdout_fraction": self.holdout_fraction,
+                         "min_delta_bic": self.min_delta_bic, "min_holdout_gain_percent": self.min_holdout_gain},
+            "wall_s": self.wall_s_,
+        }
+
+    def headline(self) -> str:
+        """One sentence: how the error fell and what was added."""
+        self._check_fitted()
+        c0, c1 = self.baseline_["current_A"], self.final_["current_A"]
+        if not self.selected_:
+            s = f"no catalogued effect is supported by the data; current fit {c0:.1f} % with the calibrated base model"
+            if self.unexplained_:
+                s += f"; the residual still has structure ({self.unexplained_['hint']})"
+            return s
+        fc = self.final_calibration_
+        parts = []
+        for e in self.selected_:
+            for fp in CATALOGUE[e].parameters:
+                for k in (fp.name, fp.partner):
+                    if k and k in fc.values_:
+                        parts.append(f"{k} = {_fmt_val(fc.values_[k], fc.stderr_[k])} {_unit(k)}".rstrip())
+        return (f"current fit rose from {c0:.1f} % to {c1:.1f} % after adding {', '.join(self.selected_)}"
+                + (f", {', '.join(parts)}" if parts else ""))
+
+    def summary(self) -> str:
+        """Return a readable account of the diagnosis."""
+        self._check_fitted()
+        lines = [f"diagnosis of {self.measurement_.source} ({self.wall_s_:.0f} s)",
+                 f"  baseline (calibrated {', '.join(self.calibrate)}): {_fmt_fit(self.baseline_)}"]
+        for i, rnd in enumerate(self.rounds_):
+            lines.append(f"  round {i + 1}: candidates against "
+                         + ("the base" if i == 0 else "base + " + ", ".join(self.selected_[:i])))
+            lines.append(f"    {'effect':<22} {'dBIC':>10} {'held-out':>9} {'fit I %':>8}  verdict")
+            for r in rnd:
+                fi = r.fit_percent.get("current_A", math.nan)
+                lines.append(f"    {r.effect:<22} {r.delta_bic:>10.1f} {r.holdout_gain:>8.1f}% {fi:>8.1f}  "
+                             f"{'SUPPORTED' if r.supported else r.reason}")
+        lines.append(f"  selected: {', '.join(self.selected_) or 'nothing'}")
+        lines.append(f"  final: {_fmt_fit(self.final_)}")
+        lines.append("  " + self.headline())
+        if self.unexplained_:
+            lines.append("  unexplained residual: " + self.unexplained_["text"])
+        return "\n".join(lines)
+
+    def plot(self, fig=None):
+        """Measured vs base vs final model, residuals, correlation and spectrum (failing intervals shaded).
+
+        Parameters
+        ----------
+        fig : matplotlib.figure.Figure, optional
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+        """
+        self._check_fitted()
+        return self.comparison_base_.plot(fig=fig, compare_with=self.comparison_final_,
+                                          labels=("calibrated base", "final: base + " + (", ".join(self.selected_) or
+                                                                                         "nothing")))
+
+    def plot_ranking(self, fig=None):
+        """Bar charts: delta BIC and held-out gain of each first-round candidate, and fit before/after.
+
+        Parameters
+        ----------
+        fig : matplotlib.figure.Figure, optional
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+        """
+        from matplotlib.figure import Figure
+
+        self._check_fitted()
+        fig = fig or Figure(figsize=(13, 3.6))
+        a0, a1, a2 = fig.subplots(1, 3, gridspec_kw={"width_ratios": [3, 3, 2]})
+        rk = self.ranking_
+        names = [r.effect for r in rk]
+        colors = ["C2" if r.supported else "C7" for r in rk]
+        y = np.arange(len(rk))
+        dbic = [max(-1e6, r.delta_bic) if math.isfinite(r.delta_bic) else 0 for r in rk]
+        a0.barh(y, [-d for d in dbic], color=colors)
+        a0.set_xscale("symlog", linthresh=10)
+        a0.axvline(self.min_delta_bic, color="k", ls=":")
+        a0.set_yticks(y, names, fontsize=8)
+        a0.invert_yaxis()
+        a0.set_title("-dBIC (fitting part), threshold dotted", fontsize=9)
+        a1.barh(y, [r.holdout_gain if math.isfinite(r.holdout_gain) else 0 for r in rk], color=colors)
+        a1.axvline(self.min_holdout_gain, color="k", ls=":")
+        a1.set_yticks(y, [""] * len(y))
+        a1.invert_yaxis()
+        a1.set_title("held-out gain [%], threshold dotted", fontsize=9)
+        chans = list(self.baseline_)
+        x = np.arange(len(chans))
+        a2.bar(x - 0.2, [self.baseline_[c] for c in chans], 0.4, label="calibrated base", color="C0")
+        a2.bar(x + 0.2, [self.final_[c] for c in chans], 0.4, label="final", color="C3")
+        for i, c in enumerate(chans):
+            a2.text(i - 0.2, self.baseline_[c], f"{self.baseline_[c]:.1f}", ha="center", va="bottom", fontsize=8)
+            a2.text(i + 0.2, self.final_[c], f"{self.final_[c]:.1f}", ha="center", va="bottom", fontsize=8)
+        a2.set_xticks(x, chans)
+        lo = min(min(self.baseline_.values()), min(self.final_.values()))
+        a2.set_ylim(max(0.0, lo - 10), 102)
+        a2.set_title("fit % before and after", fontsize=9)
+        a2.legend(fontsize=8, loc="lower right")
+        fig.suptitle(self.headline(), fontsize=10)
+        fig.tight_layout()
+        return fig
+
+    def report(self, folder, protect=()) -> list:
+        """Write ``diagnose.html`` (self-contained), ``diagnose.json`` and the figures into a folder.
+
+        Parameters
+        ----------
+        folder : path-like
+            Destination folder (created).
+        protect : sequence of path-like
+            Input files never to overwrite.
+
+        Returns
+        -------
+        list of Path
+            Files written (each whole or not at all).
+        """
+        from .report import write_report_files
+
+        self._check_fitted()
+        import io
+
+        figs = {"diagnose_signals.png": self.plot(), "diagnose_ranking.png": self.plot_ranking()}
+        pngs = {}
+        for name, fig in figs.items():
+            buf = io.BytesIO()
+            fig.savefig(buf, format="png", dpi=100)
+            pngs[name] = buf.getvalue()
+        return write_report_files(folder, {"diagnose.html": self.html(figs), "diagnose.json": self.to_dict(), **pngs},
+                                  protect=protect)
+
+    def html(self, figs=None) -> str:
+        """Return the report as one self-contained HTML page.
+
+        Parameters
+        ----------
+        figs : dict, optional
+            Figures already drawn (name -> Figure).
+
+        Returns
+        -------
+        str
+        """
+        from .report import esc, figure_tag, page, table
+
+        self._check_fitted()
+        figs = figs or {"s": self.plot(), "r": self.plot_ranking()}
+        f_sig, f_rank = list(figs.values())
+        parts = [f'<p class="big">{esc(self.headline())}</p>']
+        if self.unexplained_:
+            parts.append(f'<p class="big warn">Unexplained: {esc(self.unexplained_["text"])}</p>')
+        parts.append("<h2>Measured, calibrated base and final model</h2>")
+        parts.append("<p>Shaded: intervals where the base model's |residual| exceeds 3 sigma. "
+                     "Dashed lines: phases of the start-up.</p>")
+        parts.append(figure_tag(f_sig, "signals and residuals"))
+        rows = [(f["channel"], f["text"]) for f in self.comparison_base_.failing]
+        parts.append("<h3>Where the base model fails</h3>" + (table(["channel", "interval"], rows, left=2)
+                                                                if rows else "<p>nowhere beyond 3 sigma</p>"))
+        rows = [(f["channel"], f["text"]) for f in self.comparison_final_.failing]
+        parts.append("<h3>Where the final model fails</h3>" + (table(["channel", "interval"], rows, left=2)
+                                                                 if rows else "<p>nowhere beyond 3 sigma</p>"))
+        parts.append("<h2>Candidates</h2>")
+        parts.append(figure_tag(f_rank, "ranking"))
+        for i, rnd in enumerate(self.rounds_):
+            parts.append(f"<h3>Round {i + 1}: against " + esc("the calibrated base" if i == 0 else
+                                                              "base + " + ", ".join(self.selected_[:i])) + "</h3>")
+            rows, sel = [], set()
+            for j, r in enumerate(rnd):
+                if r.supported and j == 0:
+                    sel.add(j)
+                pars = "; ".join(f"{k} = {_fmt_val(v['value'], v['stderr'])} {v['unit']}".rstrip()
+                                 for k, v in r.parameters.items() if k in _effect_params(r.effect))
+                rows.append((r.effect, f"{r.delta_bic:.1f}", f"{r.holdout_gain:+.1f}",
+                             f"{r.fit_percent.get('current_A', math.nan):.1f}",
+                             f"{r.fit_percent.get('speed_rpm', math.nan):.2f}", pars or "-",
+                             ", ".join(r.on_bound) or "-", "supported" if r.supported else r.reason))
+            parts.append(table(["effect", "dBIC", "held-out gain %", "fit I %", "fit n %", "effect parameters",
+                                "on bound", "verdict"], rows, left=1, selected=sel))
+        parts.append("<h2>Final model</h2><pre>" + esc(self.final_calibration_.summary()) + "</pre>")
+        parts.append("<h2>Residual signature of the final model</h2><pre>"
+                     + esc(self.signature_["text"]) + "</pre>")
+        for note in self.experiment_.notes:
+            parts.append(f"<p>Note: {esc(note)}</p>")
+        parts.append("<h2>Settings</h2><pre>" + esc(str(self.to_dict()["settings"])) + "</pre>")
+        return page(f"kilnctl diagnose: {self.measurement_.source}", "\n".join(parts))
+
+
+def variance_inflation(e, max_lag: int | None = None) -> float:
+    """Variance inflation of a sum of autocorrelated residuals: 1 + 2 sum_k rho_k.
+
+    The sum runs over the initial positive run of the autocorrelation (Geyer's
+    initial positive sequence); 1 for white noise, (1 + phi)/(1 - phi) for
+    first-order autoregressive noise.
+
+    Parameters
+    ----------
+    e : array_like
+        Residual, evenly sampled.
+    max_lag : int, optional
+        Largest lag [samples] (default N/4).
+
+    Returns
+    -------
+    float
+        >= 1.
+    """
+    from .stats import autocorr
+
+    e = np.asarray(e, float)
+    L = max(1, min(e.size // 4, max_lag or e.size // 4))
+    r = autocorr(e - e.mean(), L)["r"][1:]
+    neg = np.nonzero(r <= 0)[0]
+    r = r[: neg[0]] if neg.size else r
+    return float(max(1.0, 1.0 + 2.0 * r.sum()))
+
+
+def _corrected_delta_bic(m, cal, current, exp, train) -> float:
+    """delta BIC with each channel's likelihood ratio deflated by its residual's variance inflation."""
+    active = m.t >= exp.t0 - 1e-9
+    tr = train[active]
+    val, n_eff = 0.0, 0.0
+    for c in CHANNELS:
+        e = m.channels[c][active] - cal.run_.outputs[c]
+        f = variance_inflation(e)
+        val += cal.n_[c] * math.log(max(cal.rss_[c], 1e-300) / max(current.rss_[c], 1e-300)) / f
+        n_eff += int(tr.sum()) / f
+    k_new = len(cal.values_) - len(current.values_)
+    return float(val + k_new * math.log(max(n_eff, 2.0)))
+
+
+def _effect_params(effect):
+    out = set()
+    for fp in CATALOGUE[effect].parameters:
+        out.add(fp.name)
+        if fp.partner:
+            out.add(fp.partner)
+    return out
+
+
+def _base_starts(params):
+    """A few starting points for the base calibration (friction spans a wide range)."""
+    return [{"mu_c": 0.8 * params.mu_c}, {"mu_c": 1.2 * min(params.mu_c, params.mu_s / 1.25)}]
+
+
+def _params_dict(cal: Calibration) -> dict:
+    return {k: {"value": _num(cal.values_[k]), "stderr": _num(cal.stderr_[k]), "unit": _unit(k),
+                "on_bound": k in cal.on_bound_, "not_identifiable": k in cal.not_identifiable_} for k in cal.names_}
+
+
+def _fmt_fit(fit: dict) -> str:
+    return ", ".join(f"{k} {v:.1f} %" for k, v in fit.items())
+
+
+def _fmt_val(v, se) -> str:
+    if se is None or not math.isfinite(se):
+        return f"{v:.4g} (se n/a)"
+    if se == 0:
+        return f"{v:.4g}"
+    digits = max(0, 1 - int(math.floor(math.log10(abs(se))))) if se > 0 else 2
+    if abs(v) >= 1e5 or (abs(v) < 1e-3 and v != 0):
+        return f"{v:.3e} +- {se:.1e}"
+    return f"{v:.{digits}f} +- {se:.{digits}f}"
+
+
+def _jsonable(d):
+    if d is None:
+        return None
+    out = {}
+    for k, v in d.items():
+        if isinstance(v, float):
+            out[k] = _num(v)
+        elif isinstance(v, dict):
+            out[k] = _jsonable(v)
+        elif isinstance(v, (np.floating, np.integer)):
+            out[k] = _num(float(v))
+        else:
+            out[k] = v
+    return out
+
+
+# --- residual signature --------------------------------------------------------------------------
+def residual_signature(comp: Comparison, n: float) -> dict:
+    """Describe what a model still misses: frequency, correlations, where.
+
+    The current residual is regressed on signals that name kinds of physics:
+    the kiln angle (sin and cos: a once-per-revolution torque), the motor
+    speed (drag), the acceleration (inertia), the speed error (controller or
+    sensor), the current itself (limits, sensor scale).  The residual "has
+    structure" when one of these explains more than 25 % of its variance,
+    when its spectrum has a narrow peak (more than NARROWBAND_RATIO x its
+    neighbours), or
+    when it exceeds 3 sigma somewhere.
+
+    Parameters
+    ----------
+    comp : Comparison
+        Comparison of the final model with the record.
+    n : float
+        Total reduction motor to kiln [-] (for the kiln angle).
+
+    Returns
+    -------
+    dict
+        ``structured`` (bool), ``dominant_hz`` [Hz], ``peak_ratio``,
+        ``rms_A`` [A], ``r2`` (variance explained by each regressor [-]),
+        ``strongest``, ``failing`` (texts), ``hint`` and ``text``.
+    """
+    ch = comp.channels["current_A"]
+    e = ch.residual - ch.residual.mean()
+    t = comp.t
+    speed = comp.channels["speed_rpm"].measured
+    theta = kiln_angle(t, speed, n)
+    dt = comp.dt
+    win = max(1, int(round(0.25 / dt)))
+    sm = np.convolve(speed, np.ones(win) / win, mode="same")
+    accel = np.gradient(sm, t)
+    ref = comp.extra.get("model_outputs", {}).get("speed_ref_rpm")
+    regs = {
+        "kiln angle (once per revolution)": np.column_stack([np.sin(theta), np.cos(theta)]),
+        "speed": speed[:, None],
+        "acceleration": accel[:, None],
+        "current": comp.channels["current_A"].measured[:, None],
+    }
+    if ref is not None:
+        regs["speed error"] = (ref - speed)[:, None]
+    r2 = {}
+    var = float(e @ e)
+    for k, X in regs.items():
+        X = np.column_stack([np.ones(t.size), X - X.mean(axis=0)])
+        beta, *_ = np.linalg.lstsq(X, e, rcond=None)
+        res = e - X @ beta
+        r2[k] = float(1.0 - (res @ res) / var) if var > 0 else 0.0
+    strongest = max(r2, key=r2.get)
+    spec = ch.spectrum
+    fails = [f["text"] for f in comp.channels["current_A"].failing] + \
+            [f"speed: {f['text']}" for f in comp.channels["speed_rpm"].failing]
+    peaked = spec["narrowband_ratio"] > NARROWBAND_RATIO and spec["narrowband_hz"] > 0.05
+    structured = bool(r2[strongest] > 0.25 or peaked or fails)
+    hints = {
+        "kiln angle (once per revolution)": "a torque that repeats with each kiln revolution (unbalance, shell "
+                                            "crank, girth-gear run-out)",
+        "speed": "a torque that grows with speed (drag, fan or seal load)",
+        "acceleration": "a missing inertia or a torque proportional to acceleration (a coupled motor, flywheel)",
+        "current": "something that depends on the current level (a limit, saturation, sensor scale)",
+        "speed error": "a controller or speed-sensor difference (gains, filter, lag)",
+    }
+    if peaked and r2[strongest] <= 0.25:
+        hint = (f"an oscillation near {spec['narrowband_hz']:.2f} Hz: a resonance (torsional mode, burden "
+                f"pendulum near 0.34 Hz) or a loop that is less damped than modelled")
+    elif r2[strongest] > 0.25:
+        hint = hints[strongest]
+    elif fails:
+        hint = "a local failure: " + fails[0]
+    else:
+        hint = "no structure beyond noise"
+    text = (f"current residual rms {ch.rms:.3g} A; dominant frequency {spec['dominant_hz']:.2f} Hz; "
+            f"sharpest spectral peak {spec['narrowband_hz']:.2f} Hz ({spec['narrowband_ratio']:.1f} x its "
+            "neighbours); variance explained by "
+            + ", ".join(f"{k} {100 * v:.0f} %" for k, v in sorted(r2.items(), key=lambda kv: -kv[1]))
+            + (f"; fails at {'; '.join(fails)}" if fails else "") + f". Suggests: {hint}.")
+    return {"structured": structured, "dominant_hz": spec["dominant_hz"], "peak_ratio": spec["peak_ratio"],
+            "narrowband_hz": spec["narrowband_hz"], "narrowband_ratio": spec["narrowband_ratio"],
+            "rms_A": ch.rms, "sigma_A": robust_sigma(ch.residual), "r2": r2, "strongest": strongest,
+            "failing": fails, "hint": hint, "text": text}
