@@ -9,6 +9,28 @@ The loop an engineer follows when the model does not match the kiln:
    ones the data support (``docs/tutorial_diagnose.md``).
 """
 
+from .calibrate import Calibration, holdout_masks, sweep
+from .compare import Comparison, compare
+from .diagnose import Diagnosis
+from .effects import CATALOGUE, Effect
 from .io import Experiment, Measurement, Setup, load_setup, read_csv
 
-__all__ = ["Experiment", "Measurement", "Setup", "load_setup", "read_csv"]
+__all__ = ["CATALOGUE", "Calibration", "Comparison", "Diagnosis", "Effect", "Experiment", "Measurement", "Setup",
+           "compare", "holdout_masks", "load_setup", "read_csv", "sweep", "example_paths"]
+
+
+def example_paths():
+    """Return the shipped example record and its setup file.
+
+    Returns
+    -------
+    (Path, Path)
+        ``example_record.csv`` and ``example_setup.toml`` in ``kilnctl/data``
+        (a synthetic start-up; its hidden effect is named in
+        ``docs/tutorial_diagnose.md``, not in the files).
+    """
+    from importlib import resources
+    from pathlib import Path
+
+    folder = Path(str(resources.files("kilnctl") / "data"))
+    return folder / "example_record.csv", folder / "example_setup.toml"

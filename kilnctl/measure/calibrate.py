@@ -401,7 +401,7 @@ class Calibration:
 
     # --- estimator API --------------------------------------------------------------
     def fit(self, measurement: Measurement, mask=None, *, init: dict | None = None,
-            starts=None, experiment: Experiment | None = None, horizons=(1.0,), n_local: int = 1) -> "Calibration":
+            starts=None, experiment: Experiment | None = None, horizons=(1.0,), n_local: int = 2) -> "Calibration":
         """Fit the parameters to a record.
 
         Parameters
@@ -414,8 +414,11 @@ class Calibration:
         init : dict, optional
             Starting values [units of the parameters] (default: the setup's).
         starts : list of dict, optional
-            Further candidate starting points; the one with the lowest cost
-            (one simulation each) is used.
+            Further candidate starting points, compared by cost (one
+            simulation each).  Default: a small grid over the burden friction
+            and mass when they are fitted (mu_c x 0.8/1/1.2, mu_s/mu_c 1.02,
+            1.27, 1.6, m_v x 0.9/1/1.1): the printed friction law has regimes
+            (held, stick-slip) whose costs are separate valleys.
         experiment : Experiment, optional
             The experiment (default: inferred from the record).
         horizons : sequence of float, default (1.0,)
@@ -425,7 +428,7 @@ class Calibration:
             simulation-error cost of a long record rugged (a small change of
             friction shifts every later cycle); a short horizon first finds
             the right basin.
-        n_local : int, default 1
+        n_local : int, default 2
             Local fits run from the best starting points that lie apart
             (more than one scaled unit, i.e. a factor e for log-scaled
             parameters); the lowest final cost wins.
@@ -476,7 +479,9 @@ class Calibration:
 
         t_wall = time.perf_counter()
         set_horizon(hs[0])
-        candidates = [start_vals] + [dict(start_vals, **s) for s in (starts or [])]
+        if starts is None:
+            starts = _default_starts(space.reported, start_vals)
+        candidates = [start_vals] + [dict(start_vals, **s) for s in starts]
         u0s = [space.encode(c) for c in candidates]
         if len(u0s) > 1:
             costs = [trial(u).cost for u in u0s]
@@ -649,6 +654,30 @@ class Calibration:
                 "names": list(self.names_), "on_bound": list(self.on_bound_),
                 "not_identifiable": list(self.not_identifiable_), "fit_percent": dict(self.fit_percent_),
                 "bic": self.bic_, "n_runs": self.nfev_, "n_failed_runs": self.n_failed_, "message": self.message_}
+
+
+def _default_starts(names, vals) -> list[dict]:
+    """A small grid over mu_c, mu_s (as mu_s/mu_c) and m_v, for those being fitted."""
+    import itertools
+
+    axes = []
+    if "mu_c" in names:
+        axes.append([{"mu_c": f * vals["mu_c"]} for f in (0.8, 1.0, 1.2)])
+    if "mu_s" in names:
+        axes.append([{"_ratio": r} for r in (1.02, 1.27, 1.6)])
+    if "m_v" in names:
+        axes.append([{"m_v": f * vals["m_v"]} for f in (0.9, 1.0, 1.1)])
+    if not axes:
+        return []
+    out = []
+    for combo in itertools.product(*axes):
+        d = {}
+        for part in combo:
+            d.update(part)
+        if "_ratio" in d:
+            d["mu_s"] = d.pop("_ratio") * d.get("mu_c", vals.get("mu_c", 0.4))
+        out.append(d)
+    return out
 
 
 def _covariance(J, s2, G):

@@ -224,6 +224,9 @@ class Comparison:
             w = c.whiteness
             lag_s = w["lags"] * self.dt
             a2.bar(lag_s[1:], w["r"][1:], width=self.dt, color="C0")
+            if compare_with is not None:
+                w2 = compare_with.channels[k].whiteness
+                a2.plot(w2["lags"][1:] * compare_with.dt, w2["r"][1:], color="C3", lw=1.0)
             a2.axhspan(-w["band"], w["band"], color="gray", alpha=0.2)
             a2.set_title(f"residual autocorrelation ({w['n_outside']} lags out)", fontsize=9)
             a2.set_xlabel("lag [s]")

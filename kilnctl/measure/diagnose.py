@@ -262,7 +262,7 @@ class Diagnosis:
         m = measurement
         # 1. baseline: the base model calibrated on the whole record
         base = Calibration(params, self.calibrate, model=self.model, t0=self.t0,
-                           max_nfev=self.max_nfev).fit(m, experiment=exp, starts=_base_starts(params))
+                           max_nfev=self.max_nfev).fit(m, experiment=exp)
         say(f"baseline: {_fmt_fit(base.fit_percent_)} ({base.nfev_} runs)")
         # residual scales for the comparison of structures: the base's residual RMS per channel
         # (each channel weighted by its own error level, as the BIC's likelihood does)
@@ -539,11 +539,12 @@ class Diagnosis:
         a0.set_yticks(y, names, fontsize=8)
         a0.invert_yaxis()
         a0.set_title("-dBIC (fitting part), threshold dotted", fontsize=9)
-        a1.barh(y, [r.holdout_gain if math.isfinite(r.holdout_gain) else 0 for r in rk], color=colors)
+        a1.barh(y, [max(-100.0, r.holdout_gain) if math.isfinite(r.holdout_gain) else 0 for r in rk], color=colors)
+        a1.set_xlim(-105, 105)
         a1.axvline(self.min_holdout_gain, color="k", ls=":")
         a1.set_yticks(y, [""] * len(y))
         a1.invert_yaxis()
-        a1.set_title("held-out gain [%], threshold dotted", fontsize=9)
+        a1.set_title("held-out gain [%] (cut at -100), threshold dotted", fontsize=9)
         chans = list(self.baseline_)
         x = np.arange(len(chans))
         a2.bar(x - 0.2, [self.baseline_[c] for c in chans], 0.4, label="calibrated base", color="C0")
@@ -697,11 +698,6 @@ def _effect_params(effect):
     return out
 
 
-def _base_starts(params):
-    """A few starting points for the base calibration (friction spans a wide range)."""
-    return [{"mu_c": 0.8 * params.mu_c}, {"mu_c": 1.2 * min(params.mu_c, params.mu_s / 1.25)}]
-
-
 def _params_dict(cal: Calibration) -> dict:
     return {k: {"value": _num(cal.values_[k]), "stderr": _num(cal.stderr_[k]), "unit": _unit(k),
                 "on_bound": k in cal.on_bound_, "not_identifiable": k in cal.not_identifiable_} for k in cal.names_}
@@ -749,7 +745,7 @@ def residual_signature(comp: Comparison, n: float) -> dict:
     structure" when one of these explains more than 25 % of its variance,
     when its spectrum has a narrow peak (more than NARROWBAND_RATIO x its
     neighbours), or
-    when it exceeds 3 sigma somewhere.
+    when it exceeds 3 sigma for 0.5 s or more, or 5 sigma anywhere.
 
     Parameters
     ----------
@@ -792,8 +788,16 @@ def residual_signature(comp: Comparison, n: float) -> dict:
         r2[k] = float(1.0 - (res @ res) / var) if var > 0 else 0.0
     strongest = max(r2, key=r2.get)
     spec = ch.spectrum
-    fails = [f["text"] for f in comp.channels["current_A"].failing] + \
-            [f"speed: {f['text']}" for f in comp.channels["speed_rpm"].failing]
+    # a failing interval counts when it lasts (>= 0.5 s) or goes far out (> 5 sigma): a coloured-noise
+    # excursion beyond 3 sigma is brief and rarely reaches 5
+    fails = []
+    for key, label in (("current_A", ""), ("speed_rpm", "speed: ")):
+        c = comp.channels[key]
+        for f in c.failing:
+            sl = (t >= f["t_start"]) & (t <= f["t_end"])
+            peak = float(np.max(np.abs(c.residual[sl]))) if sl.any() else 0.0
+            if f["t_end"] - f["t_start"] >= 0.5 or peak > 5.0 * c.sigma:
+                fails.append(label + f["text"])
     peaked = spec["narrowband_ratio"] > NARROWBAND_RATIO and spec["narrowband_hz"] > 0.05
     structured = bool(r2[strongest] > 0.25 or peaked or fails)
     hints = {
