@@ -77,6 +77,54 @@ def _one(job):
             "wall_s": time.perf_counter() - t0}
 
 
+#: records made differently from kilnctl.measure.synthetic: (name, expected effect or None, recipe)
+FOREIGN = (
+    ("J_m raised by 30 kg m^2 (not the second_motor component)", "second_motor",
+     {"plant": {"J_m": 51.5}}),
+    ("viscous friction on the motor shaft, B_m = 5 N m s/rad", "viscous_drag",
+     {"plant": {"B_m": 5.0}}),
+    ("unbalance 5x the plausible range, cos phase", "kiln_unbalance",
+     {"effects": ("kiln_unbalance",), "plant": {"T_unb": 1.0e6, "phi_unb": 1.5707963}}),
+    ("micro-model plant (coupling, stiff mesh, no backlash), 200 Hz, current gain +2 %, offset 5 A",
+     None, {"model": "micro", "plant": {"delta_x": 0.0}, "fs": 200.0, "gain": 1.02, "offset": 5.0}),
+    ("micro-model plant, no backlash, with a second motor of 60 kg m^2", "second_motor",
+     {"model": "micro", "effects": ("second_motor",), "plant": {"delta_x": 0.0, "J_m2": 60.0}}),
+    ("nothing hidden, slow coloured noise (tau 2 s, 8 A)", None, {"tau": 2.0, "coloured": 8.0}),
+    ("torque law with low friction (mu_c 0.3, mu_s 0.36)", "torque_friction_law",
+     {"plant": {"friction_law": "torque", "mu_c": 0.3, "mu_s": 0.36}}),
+)
+
+
+def _foreign(job):
+    """Generate a record by hand (not with make_record) and diagnose it."""
+    os.environ.setdefault("MPLBACKEND", "Agg")
+    from kilnctl import Parameters
+    from kilnctl.measure import Measurement
+    from kilnctl.measure.diagnose import Diagnosis
+    from kilnctl.measure.synthetic import DEFAULT_GAINS, _ar1, _sampled
+    from kilnctl.simulate import simulate
+
+    (name, expected, recipe), seed = job
+    setup = Parameters(DEFAULT_GAINS)
+    rng = np.random.default_rng(seed)
+    plant = setup.replace(mu_c=0.4 * (1 + 0.05 * rng.choice([-1, 1])), m_v=580e3 * (1 + 0.05 * rng.choice([-1, 1])),
+                          **recipe.get("plant", {}))
+    fs, t_end = recipe.get("fs", 50.0), 30.0
+    t = np.arange(0, t_end, 1 / fs)
+    y = _sampled(simulate(plant, recipe.get("model", "macro"), t_end=t_end, effects=recipe.get("effects", ())), t)
+    col, tau = recipe.get("coloured", 4.0), recipe.get("tau", 0.4)
+    cur = (recipe.get("gain", 1.0) * y["i_a"] + recipe.get("offset", 0.0) + 4 * rng.standard_normal(t.size)
+           + _ar1(rng, t.size, col, tau, 1 / fs))
+    spd = y["speed_rpm"] + 0.3 * rng.standard_normal(t.size) + _ar1(rng, t.size, 0.3, tau, 1 / fs)
+    m = Measurement.from_arrays(t, cur, spd, y["speed_ref_rpm"], source=name)
+    t0 = time.perf_counter()
+    d = Diagnosis(setup).fit(m)
+    return {"name": name, "expected": expected, "selected": list(d.selected_),
+            "first": d.ranking_[0].effect if d.ranking_ and d.ranking_[0].supported else None,
+            "baseline_fit": d.baseline_["current_A"], "final_fit": d.final_["current_A"],
+            "unexplained": (d.unexplained_ or {}).get("hint"), "wall_s": time.perf_counter() - t0}
+
+
 def _clean(obj):
     if isinstance(obj, dict):
         return {str(k): _clean(v) for k, v in obj.items()}
@@ -99,7 +147,23 @@ def main(argv=None) -> int:
     ap.add_argument("--no-pairs", action="store_true", help="skip the two-effect rows")
     ap.add_argument("--holdout", default="blocks", choices=("blocks", "tail"), help="hold-out kind")
     ap.add_argument("--json", metavar="FILE", help="save every record's outcome")
+    ap.add_argument("--foreign", action="store_true",
+                    help="instead: records generated differently (other implementations, magnitudes, sampling)")
     args = ap.parse_args(argv)
+    if args.foreign:
+        jobs = [(f, args.seed0 + k) for f in FOREIGN for k in range(args.seeds)]
+        with ProcessPoolExecutor(max_workers=args.jobs) as ex:
+            res = list(ex.map(_foreign, jobs))
+        print(f"{'record':<72}{'expected':>22}  selected")
+        for r in res:
+            ok = (r["selected"] == [] if r["expected"] is None else r["first"] == r["expected"])
+            print(f"{r['name'][:71]:<72}{str(r['expected']):>22}  {', '.join(r['selected']) or '-'}"
+                  f"  {'OK ' if ok else 'MISS'} fit {r['baseline_fit']:.1f} -> {r['final_fit']:.1f} %"
+                  + (f"  unexplained: {r['unexplained']}" if r["unexplained"] else ""))
+        if args.json:
+            with open(args.json, "w") as fh:
+                json.dump(res, fh, indent=1, default=float)
+        return 0
     from kilnctl.measure.effects import CATALOGUE
 
     rows = [()] + [(e,) for e in CATALOGUE] + ([] if args.no_pairs else list(PAIRS))

@@ -152,3 +152,11 @@ def test_setup_file_with_measurement_section(tmp_path):
     p.write_text('[kiln]\nm_vv = 1.0\n')
     with pytest.raises(ParameterError, match="setup.toml.*m_v"):
         load_setup(p)
+
+
+def test_experiment_without_reference_starts_where_the_speed_rises():
+    # truth: the speed follows a 74 rpm/s ramp that starts at 2.0 s, after 2 s at rest
+    t = np.arange(0, 20, 0.01)
+    w = np.clip(74.0 * (t - 2.0), 0, 500)
+    m = Measurement.from_arrays(t, 100 + 0 * t, w)
+    assert m.experiment(Parameters()).t0 == pytest.approx(2.0, abs=0.02)

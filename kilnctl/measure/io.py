@@ -194,8 +194,9 @@ class Measurement:
         With a recorded ``speed_ref_rpm`` the ramp is fitted to it (start time,
         rate, final value); the recorded values win over the setup when they
         differ by more than 2 %, and a note says so.  Without it, the ramp of
-        the setup is used and the start-up begins at the first sample (or at
-        ``t0``).
+        the setup is used, starting where the measured speed first exceeds
+        2 % of ``omega_ref`` less the time the ramp takes to reach that (or
+        at ``t0``).
 
         Parameters
         ----------
@@ -212,10 +213,13 @@ class Measurement:
         ref = self.speed_ref
         notes = []
         if ref is None:
-            start = float(self.t[0]) if t0 is None else float(t0)
+            if t0 is not None:
+                start, how = float(t0), "the setup's t0_s"
+            else:
+                start, how = self._start_from_speed(params), "the first rise of the measured speed"
             return Experiment(start, params.ramp_rate, params.omega_ref, "setup",
-                              ("no speed_ref_rpm recorded: the ramp of the setup is assumed to start at "
-                               f"t = {start:g} s",))
+                              (f"no speed_ref_rpm recorded: the setup's ramp is assumed to start at t = {start:.3f} s "
+                               f"(from {how})",))
         top = float(np.median(ref[ref >= np.percentile(ref, 90)]))
         if not np.isfinite(top) or top <= 0:
             start = float(self.t[0]) if t0 is None else float(t0)
@@ -245,6 +249,19 @@ class Measurement:
                              "the recorded value is used")
         notes.append(f"start-up begins at t = {start:.3f} s (from the recorded speed reference)")
         return Experiment(float(start), float(rate), float(top), "recorded speed_ref_rpm", tuple(notes))
+
+    def _start_from_speed(self, params: Parameters) -> float:
+        """Start of the ramp from the measured speed: where it first exceeds 2 % of omega_ref, less the
+        time the setup's ramp takes to get there (the first sample if the record starts moving)."""
+        level = 0.02 * params.omega_ref
+        w = self.speed
+        if abs(w[0]) > level:
+            return float(self.t[0])
+        above = np.nonzero(w > level)[0]
+        if above.size == 0:
+            return float(self.t[0])
+        k = int(above[0])
+        return float(max(self.t[0], self.t[k] - level / params.ramp_rate))
 
     def to_dict(self) -> dict:
         """Return a JSON-ready description (not the samples).
