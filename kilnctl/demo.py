@@ -15,7 +15,6 @@ and writes its figures into ``DIR``:
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import json
 import sys
 import time
@@ -107,12 +106,11 @@ def main(argv=None) -> int:
     print(f"  ({time.perf_counter() - t0:.1f} s)")
 
     # --- diagnosis of the example measurement -----------------------------------------
-    if importlib.util.find_spec("kilnctl.measure.demo_step") is not None:
-        t0 = _step("5. Model against measurement: where it fails, which effect is missing")
-        from .measure.demo_step import run as run_diagnose
+    t0 = _step("5. Model against measurement: where it fails, which effect is missing")
+    from .measure.example import diagnose_example
 
-        run_diagnose(out)
-        print(f"  ({time.perf_counter() - t0:.1f} s)")
+    diagnose_example(out, progress=lambda line: print("  " + line))
+    print(f"  ({time.perf_counter() - t0:.1f} s)")
 
     print(f"\nDone: figures and data in {out}/")
     return 0
