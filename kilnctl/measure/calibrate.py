@@ -401,7 +401,8 @@ class Calibration:
 
     # --- estimator API --------------------------------------------------------------
     def fit(self, measurement: Measurement, mask=None, *, init: dict | None = None,
-            starts=None, experiment: Experiment | None = None, horizons=(1.0,), n_local: int = 2) -> "Calibration":
+            starts=None, experiment: Experiment | None = None, horizons=(1.0,), n_local: int = 2,
+            separation: float = 1.0) -> "Calibration":
         """Fit the parameters to a record.
 
         Parameters
@@ -415,23 +416,29 @@ class Calibration:
             Starting values [units of the parameters] (default: the setup's).
         starts : list of dict, optional
             Further candidate starting points, compared by cost (one
-            simulation each).  Default: a small grid over the burden friction
-            and mass when they are fitted (mu_c x 0.8/1/1.2, mu_s/mu_c 1.02,
-            1.27, 1.6, m_v x 0.9/1/1.1): the printed friction law has regimes
-            (held, stick-slip) whose costs are separate valleys.
+            simulation each).  Default: a grid over the burden friction and
+            mass when they are fitted (mu_c x 0.7 ... 1.3, mu_s/mu_c 1.02 ...
+            1.7, m_v x 0.9/1/1.1, J_v x 0.7 ... 1.4): the printed friction law
+            has regimes (held, stick-slip) whose costs are separate valleys,
+            and the burden inertia sets the phase of its oscillation.
         experiment : Experiment, optional
             The experiment (default: inferred from the record).
         horizons : sequence of float, default (1.0,)
             Growing fitting horizons, as fractions of the record after the
-            start [-]: the fit on each warm-starts the next, and the starting
+            start [-]: the fit on each warm-starts the next (after probing a
+            3^p grid of small steps around it, p <= 4), and the starting
             points are compared on the first.  Stick-slip cycles make the
             simulation-error cost of a long record rugged (a small change of
             friction shifts every later cycle); a short horizon first finds
             the right basin.
         n_local : int, default 2
-            Local fits run from the best starting points that lie apart
-            (more than one scaled unit, i.e. a factor e for log-scaled
-            parameters); the lowest final cost wins.
+            Local fits run: from ``init`` (when n_local > 1) and from the best
+            other starting points that lie apart (more than one scaled unit,
+            i.e. a factor e for log-scaled parameters, unless ``separation``
+            says otherwise); the lowest final cost wins.
+        separation : float, default 1.0
+            Least distance (largest scaled-coordinate difference) between two
+            starting points of local fits [-].
 
         Returns
         -------
@@ -486,9 +493,9 @@ class Calibration:
         if len(u0s) > 1:
             costs = [trial(u).cost for u in u0s]
             order = np.argsort(costs, kind="stable")
-            picked = []
+            picked = [0] if n_local > 1 else []  # the given starting point always gets a local fit
             for i in order:
-                if all(np.max(np.abs(u0s[i] - u0s[j])) > 1.0 for j in picked):
+                if all(np.max(np.abs(u0s[i] - u0s[j])) > separation for j in picked):
                     picked.append(int(i))
                 if len(picked) >= max(1, n_local):
                     break
@@ -497,14 +504,61 @@ class Calibration:
             firsts = u0s
         J, msg, nfev = np.zeros((0, 0)), "nothing to fit", 1
         results = []
+        def local(u):
+            """One trust-region fit from u; coordinates without influence at u stay where they are
+            (a Gauss-Newton step along a zero Jacobian column is unbounded, and would throw the parameter
+            across a regime boundary, e.g. mu_s while the burden is held)."""
+            r0 = fun(u)
+            cols = np.zeros(u.size)
+            for j in range(u.size):
+                h = self.diff_step * max(1.0, abs(u[j]))
+                up = u.copy()
+                up[j] = up[j] + h if up[j] + h <= space.upper[j] else up[j] - h
+                cols[j] = np.linalg.norm(fun(up) - r0) / h
+            live = cols > 1e-7 * max(cols.max(), 1e-300)
+            if not live.any():
+                return u, np.zeros((r0.size, u.size)), "no parameter influences the fit", 1 + u.size
+
+            def f_live(v):
+                w = u.copy()
+                w[live] = v
+                return fun(w)
+
+            res = least_squares(f_live, u[live], bounds=(space.lower[live], space.upper[live]), x_scale=1.0,
+                                diff_step=self.diff_step, max_nfev=self.max_nfev, method="trf")
+            w = u.copy()
+            w[live] = res.x
+            Jf = np.zeros((res.jac.shape[0], u.size))
+            Jf[:, live] = res.jac
+            return w, Jf, res.message, int(res.nfev) + 1 + u.size
+
+        log_coord = np.array([c[0].startswith("ln(") for c in space.coords], bool)
+
+        def probe(u):
+            """Best of a 3^p grid of small steps around u (3 % linear, 10 % log; p <= 4): run before each
+            longer horizon, where the next cycle may sit in a neighbouring valley."""
+            if u.size == 0 or u.size > 4:
+                return u
+            import itertools
+
+            steps = np.where(log_coord, 0.1, 0.03 * np.maximum(1.0, np.abs(u)))
+            best_u, best_c = u, trial(u).cost
+            for d in itertools.product((-1.0, 0.0, 1.0), repeat=u.size):
+                v = np.clip(u + steps * np.array(d), space.lower, space.upper)
+                c = trial(v).cost
+                if c < best_c:
+                    best_u, best_c = v, c
+            return best_u
+
         for u in firsts:
-            for h in hs:
+            for i, h in enumerate(hs):
                 set_horizon(h)
                 if not space.coords:
                     break
-                res = least_squares(fun, u, bounds=(space.lower, space.upper), x_scale=1.0,
-                                    diff_step=self.diff_step, max_nfev=self.max_nfev, method="trf")
-                u, J, msg, nfev = res.x, res.jac, res.message, nfev + int(res.nfev)
+                if i > 0:
+                    u = probe(u)
+                u, J, msg, n_ev = local(u)
+                nfev += n_ev
             results.append((trial(u).cost, u, J, msg))
         _, u, J, msg = min(results, key=lambda r: r[0])
         if not space.coords:
@@ -528,6 +582,9 @@ class Calibration:
             corr = cov_phys / np.outer(d, d) if p else np.zeros((0, 0))
         corr = np.where(np.isfinite(corr), corr, 0.0)
         if p:
+            # a value on a singular direction has no defined correlation: it must not taint the others
+            corr[singular, :] = 0.0
+            corr[:, singular] = 0.0
             np.fill_diagonal(corr, 1.0)
         self.corr_ = corr
         span = space.upper - space.lower
@@ -662,11 +719,13 @@ def _default_starts(names, vals) -> list[dict]:
 
     axes = []
     if "mu_c" in names:
-        axes.append([{"mu_c": f * vals["mu_c"]} for f in (0.8, 1.0, 1.2)])
+        axes.append([{"mu_c": f * vals["mu_c"]} for f in (0.7, 0.85, 1.0, 1.15, 1.3)])
     if "mu_s" in names:
-        axes.append([{"_ratio": r} for r in (1.02, 1.27, 1.6)])
+        axes.append([{"_ratio": r} for r in (1.02, 1.15, 1.3, 1.5, 1.7)])
     if "m_v" in names:
         axes.append([{"m_v": f * vals["m_v"]} for f in (0.9, 1.0, 1.1)])
+    if "J_v" in names:  # sets the burden's oscillation frequency: its phase over a record is rugged
+        axes.append([{"J_v": f * vals["J_v"]} for f in (0.7, 0.85, 1.0, 1.2, 1.4)])
     if not axes:
         return []
     out = []

@@ -153,9 +153,12 @@ class Effect:
         Growing fitting horizons (fractions of the record) used when it is
         refitted (see :meth:`~kilnctl.measure.calibrate.Calibration.fit`);
         ``after_first_failure``: first up to 1 s after the current model's
-        first failing interval, then halfway to the end, then all.
+        first failing interval, then longer by 5 % of the record at a time.
     grid_points : int
         Points of the coarse start grid per parameter.
+    separation : float
+        Least scaled distance between the starting points of the local fits
+        (small where the cost has narrow parallel valleys).
     """
 
     name: str
@@ -170,6 +173,7 @@ class Effect:
     notes: str = ""
     horizons: tuple = (1.0,)
     grid_points: int = 24
+    separation: float = 1.0
 
     def applicable(self, params: Parameters, model: str) -> str | None:
         """Return None if the effect can be added to this base, else the reason it cannot.
@@ -317,7 +321,7 @@ CATALOGUE: dict[str, Effect] = {e.name: e for e in [
         notes="an option of the burden model, not a component: no new parameter; mu_c and mu_s are refitted "
               "(their meaning changes with the law), first on the record up to the end of the current model's "
               "first failing interval, then on all of it: the cost of a long run of stick-slip cycles is rugged.",
-        horizons="after_first_failure"),
+        horizons="after_first_failure", separation=0.04),
     Effect(
         "speed_sensor_lag",
         "The controller sees the motor speed through a first-order lag (tacho filter, encoder averaging).",
