@@ -391,7 +391,7 @@ def effect_components(names, params: Parameters, model: str = "macro") -> tuple[
         if nm in CATALOGUE:
             eff = CATALOGUE[nm]
             if eff.model is not None and eff.model != model:
-                raise ModelError(f"effect {nm!r} needs the {eff.model} model ({eff.notes.split('.')[0]}); "
+                raise ModelError(f"effect {nm!r} needs the {eff.model} model (the {model} model cannot carry it); "
                                  f"use --model {eff.model}")
             if eff.options:
                 params = params.replace(**eff.options)

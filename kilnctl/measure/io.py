@@ -471,7 +471,7 @@ def _check_units(arrays, lines, source, params, row_word):
 #: keys of the optional [measurement] section of a setup file
 MEASUREMENT_KEYS = {
     "t0_s": "time in the record at which the start-up (speed ramp) begins [s]",
-    "calibrate": "list of base parameters to calibrate (default: mu_c, mu_s, m_v)",
+    "calibrate": "list of base parameters to calibrate (default: mu_c, mu_s, m_v, J_v)",
     "candidates": "list of catalogue effects diagnose may try (default: all)",
 }
 
