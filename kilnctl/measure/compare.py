@@ -16,8 +16,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..params import Parameters
+from ..simulate import resolve_gains
 from .io import Experiment, Measurement
-from .runner import CHANNELS, ModelRun, fixed_gains, kiln_angle, run_model
+from .runner import CHANNELS, ModelRun, kiln_angle, run_model
 from .stats import autocorr, crosscorr, failing_intervals, fit_percent, residual_spectrum, robust_sigma
 
 __all__ = ["Comparison", "ChannelComparison", "compare", "compare_run"]
@@ -371,7 +372,7 @@ def compare(measurement: Measurement, params: Parameters | None = None, model: s
         input and the other channel (99 % bands), residual spectrum, and the
         failing intervals described in words.
     """
-    params = fixed_gains(Parameters() if params is None else params)
+    params = resolve_gains(Parameters() if params is None else params)
     exp = measurement.experiment(params, t0=t0)
     run = run_model(params, measurement, exp, model=model, effects=effects)
     return compare_run(measurement, run, exp, model=model, effects=effects, params=params, max_lag_s=max_lag_s)

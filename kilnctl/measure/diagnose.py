@@ -31,11 +31,12 @@ import numpy as np
 
 from ..errors import KilnctlError, ModelError, NotFittedError, close_matches_hint
 from ..params import SPECS, Parameters
+from ..simulate import resolve_gains
 from .calibrate import Calibration, holdout_masks
 from .compare import Comparison, compare_run
 from .effects import CATALOGUE, effect_components, grid_starts
 from .io import Measurement
-from .runner import CHANNELS, fixed_gains, kiln_angle
+from .runner import CHANNELS, kiln_angle
 from .stats import failing_intervals, residual_spectrum, robust_sigma
 
 __all__ = ["Diagnosis", "CandidateResult", "residual_signature", "DEFAULT_CALIBRATE"]
@@ -227,8 +228,10 @@ class Diagnosis:
         else:
             horizons = sorted(set(hz) | {1.0})
         sep = CATALOGUE[new_effect].separation if new_effect else 1.0
+        # the widest smoothing any effect of the structure asks for (its events must stay aligned in every refit)
+        smoothing = tuple(sorted({w for e in effects for w in CATALOGUE[e].smoothing}, reverse=True)) or (0.0,)
         return cal.fit(m, mask=mask, init=init, starts=list(starts), experiment=experiment, horizons=horizons,
-                       n_local=self.n_local if new_effect else 1, separation=sep)
+                       n_local=self.n_local if new_effect else 1, separation=sep, smoothing=smoothing)
 
     @staticmethod
     def _first_failure(m, cal, exp):
@@ -259,7 +262,7 @@ class Diagnosis:
         """
         say = progress or (lambda s: None)
         wall0 = time.perf_counter()
-        params = fixed_gains(self.params)
+        params = resolve_gains(self.params)
         exp = measurement.experiment(params, t0=self.t0)
         m = measurement
         # 1. baseline: the base model calibrated on the whole record

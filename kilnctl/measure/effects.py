@@ -159,6 +159,12 @@ class Effect:
     separation : float
         Least scaled distance between the starting points of the local fits
         (small where the cost has narrow parallel valleys).
+    smoothing : tuple of float
+        Moving-average widths of the residual [s] on which the starting
+        points are compared and each local fit begins, widest first (see
+        :meth:`~kilnctl.measure.calibrate.Calibration.fit`): for effects whose
+        trace is a short event or a jump whose time depends on the
+        parameters.  Every refit of a structure with the effect uses them.
     """
 
     name: str
@@ -174,6 +180,7 @@ class Effect:
     horizons: tuple = (1.0,)
     grid_points: int = 24
     separation: float = 1.0
+    smoothing: tuple = (0.0,)
 
     def applicable(self, params: Parameters, model: str) -> str | None:
         """Return None if the effect can be added to this base, else the reason it cannot.
@@ -282,7 +289,7 @@ CATALOGUE: dict[str, Effect] = {e.name: e for e in [
         "the model's current peak is above the measured one",
         starts=lambda params, m: [{"I_max": f * _peak_current(m)} for f in (0.9, 0.95, 0.98, 1.0, 1.02, 1.05, 1.1)]
         + [{"I_max": params.I_max}],
-        plausible={"I_max": (0.9, 0.98)},
+        plausible={"I_max": (0.9, 0.98)}, separation=0.02,
         notes="current_limit is in both base models with the setup's I_max; as a candidate, I_max is freed. "
               "Synthetic records draw I_max as a fraction of the plant's peak current without the limit."),
     Effect(
@@ -306,11 +313,14 @@ CATALOGUE: dict[str, Effect] = {e.name: e for e in [
         "in the first second or so: current below the model while the motor turns free, then a spike "
         "when the teeth meet; nothing at steady state",
         starts=lambda params, m: [{"delta_x": 0.004}, {"delta_x": 0.008}, {"delta_x": 0.016}],
-        plausible={"delta_x": (0.004, 0.016)}, grid_points=80,
+        plausible={"delta_x": (0.004, 0.016)}, grid_points=80, smoothing=(0.4, 0.1),
         notes="needs the micro model (coupling, pinion, mesh), which has backlash; the macro model has none. "
               "The candidate runs the micro model with the base's calibrated values and fits delta_x; the "
               "evidence is against the macro base (the micro model with delta_x = 0 is close to it). Only the "
-              "free travel gap_0 * delta_x shows in a start-up: gap_0 is kept at the setup's value."),
+              "free travel gap_0 * delta_x shows in a start-up: gap_0 is kept at the setup's value. The impact "
+              "is a spike one or two samples long whose time moves with the gap, so the cost has a valley a "
+              "fraction of a millimetre wide: starts are compared, and fits begin, on a residual smoothed over "
+              "0.4 s, then 0.1 s, then none."),
     Effect(
         "torque_friction_law",
         "The burden breaks away when the friction torque needed to hold it exceeds mu_s N R (torque-"
@@ -320,8 +330,10 @@ CATALOGUE: dict[str, Effect] = {e.name: e for e in [
         "breakaway, with a period of seconds; the paper's law gives small sliding oscillations",
         notes="an option of the burden model, not a component: no new parameter; mu_c and mu_s are refitted "
               "(their meaning changes with the law), first on the record up to the end of the current model's "
-              "first failing interval, then on all of it: the cost of a long run of stick-slip cycles is rugged.",
-        horizons="after_first_failure", separation=0.04),
+              "first failing interval, then on all of it: the cost of a long run of stick-slip cycles is rugged. "
+              "A breakaway misplaced in time costs in proportion to the shift (a cusp at the right friction): "
+              "each fit runs on a residual smoothed over 0.4 s, then 0.1 s, then none.",
+        horizons="after_first_failure", separation=0.04, smoothing=(0.4, 0.1)),
     Effect(
         "speed_sensor_lag",
         "The controller sees the motor speed through a first-order lag (tacho filter, encoder averaging).",

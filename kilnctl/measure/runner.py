@@ -15,48 +15,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import KilnctlError, ModelError
+from ..errors import KilnctlError
 from ..params import Parameters
 from .io import Experiment, Measurement
 
-__all__ = ["CHANNELS", "ModelRun", "run_model", "fixed_gains", "kiln_angle"]
+__all__ = ["CHANNELS", "ModelRun", "run_model", "kiln_angle"]
 
 #: measured column -> model output, unit
 CHANNELS: dict[str, tuple[str, str]] = {"current_A": ("i_a", "A"), "speed_rpm": ("speed_rpm", "rpm")}
 #: default simulation output step per model [s] (the simulator's own defaults)
 _DT = {"macro": 5e-3, "micro": 1e-3}
-
-
-def fixed_gains(params: Parameters) -> Parameters:
-    """Return ``params`` with the PID gains fixed (``gains = 'given'``).
-
-    With ``gains = 'design'`` the gains are designed once, here, from the
-    setup; calibrating a parameter later must not redesign the controller
-    the plant actually ran.
-
-    Parameters
-    ----------
-    params : Parameters
-
-    Returns
-    -------
-    Parameters
-
-    Raises
-    ------
-    KilnctlError
-        When the design is not available; the message asks for the gains.
-    """
-    if params.gains == "given":
-        return params
-    try:
-        from ..simulate import resolve_gains
-
-        return resolve_gains(params)
-    except ImportError as exc:  # design module not installed yet
-        raise ModelError(
-            "the setup says gains = 'design' but the controller design is not available "
-            f"({exc}); state the gains used in the experiment: gains = \"given\", k_p, k_I, k_D") from None
 
 
 @dataclass
@@ -118,7 +86,7 @@ def run_model(params: Parameters, measurement: Measurement, experiment: Experime
     Parameters
     ----------
     params : Parameters
-        Parameters of the model (gains fixed, see :func:`fixed_gains`).
+        Parameters of the model (gains fixed, see :func:`kilnctl.simulate.resolve_gains`).
     measurement : Measurement
         The record.
     experiment : Experiment
