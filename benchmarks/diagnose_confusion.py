@@ -107,8 +107,9 @@ def _foreign(job):
     (name, expected, recipe), seed = job
     setup = Parameters(DEFAULT_GAINS)
     rng = np.random.default_rng(seed)
-    plant = setup.replace(mu_c=0.4 * (1 + 0.05 * rng.choice([-1, 1])), m_v=580e3 * (1 + 0.05 * rng.choice([-1, 1])),
-                          **recipe.get("plant", {}))
+    off = {"mu_c": 0.4 * (1 + 0.05 * rng.choice([-1, 1])), "m_v": 580e3 * (1 + 0.05 * rng.choice([-1, 1]))}
+    off.update(recipe.get("plant", {}))
+    plant = setup.replace(**off)
     fs, t_end = recipe.get("fs", 50.0), 30.0
     t = np.arange(0, t_end, 1 / fs)
     y = _sampled(simulate(plant, recipe.get("model", "macro"), t_end=t_end, effects=recipe.get("effects", ())), t)
@@ -123,6 +124,15 @@ def _foreign(job):
             "first": d.ranking_[0].effect if d.ranking_ and d.ranking_[0].supported else None,
             "baseline_fit": d.baseline_["current_A"], "final_fit": d.final_["current_A"],
             "unexplained": (d.unexplained_ or {}).get("hint"), "wall_s": time.perf_counter() - t0}
+
+
+def _guarded(fn_job):
+    """Run one record; a failure is reported with its record instead of ending the whole benchmark."""
+    fn, job = fn_job
+    try:
+        return fn(job)
+    except Exception as exc:  # noqa: BLE001 - reported, and the table says how many records it holds
+        return {"job": repr(job)[:200], "error": f"{type(exc).__name__}: {exc}"}
 
 
 def _clean(obj):
@@ -153,7 +163,11 @@ def main(argv=None) -> int:
     if args.foreign:
         jobs = [(f, args.seed0 + k) for f in FOREIGN for k in range(args.seeds)]
         with ProcessPoolExecutor(max_workers=args.jobs) as ex:
-            res = list(ex.map(_foreign, jobs))
+            res = list(ex.map(_guarded, [(_foreign, j) for j in jobs]))
+        failed = [r for r in res if "error" in r]
+        res = [r for r in res if "error" not in r]
+        for r in failed:
+            print(f"FAILED: {r['job']}: {r['error']}")
         print(f"{'record':<72}{'expected':>22}  selected")
         for r in res:
             ok = (r["selected"] == [] if r["expected"] is None else r["first"] == r["expected"])
@@ -173,7 +187,11 @@ def main(argv=None) -> int:
     jobs = [(row, args.seed0 + k, args.holdout) for row in rows for k in range(args.seeds)]
     t0 = time.perf_counter()
     with ProcessPoolExecutor(max_workers=args.jobs) as ex:
-        results = list(ex.map(_one, jobs))
+        results = list(ex.map(_guarded, [(_one, j) for j in jobs]))
+    for r in results:
+        if "error" in r:
+            print(f"FAILED: {r['job']}: {r['error']}")
+    results = [r for r in results if "error" not in r]
     wall = time.perf_counter() - t0
     cols = ["none"] + list(CATALOGUE)
     short = {c: c[:8] for c in cols}
@@ -183,6 +201,8 @@ def main(argv=None) -> int:
           + f"{'first%':>8}{'exact%':>8}{'par err':>9}{'dfit':>7}{'s/rec':>7}")
     for row in rows:
         rs = [r for r in results if tuple(r["hidden"]) == row]
+        if not rs:
+            continue
         counts = {c: sum(r["first"] == c for r in rs) for c in cols}
         name = "+".join(row) or "none"
         if row:

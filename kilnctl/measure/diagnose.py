@@ -45,6 +45,9 @@ __all__ = ["Diagnosis", "CandidateResult", "residual_signature", "DEFAULT_CALIBR
 NARROWBAND_RATIO = 10.0
 #: below this share of an effect in the held-out part, the held-out test cannot judge it (see Diagnosis)
 MIN_HELDOUT_SHARE = 0.1
+#: a refit of the current structure from a candidate's base values replaces the current model when it lowers
+#: the cost by more than this fraction [-] (see Diagnosis._reanchor)
+REANCHOR_GAIN = 1e-3
 #: base parameters calibrated by default: the paper's friction study (Fig. 4) plus the burden mass and inertia
 #: (the paper blames both for its mismatch of the oscillation frequency)
 DEFAULT_CALIBRATE = ("mu_c", "mu_s", "m_v", "J_v")
@@ -420,11 +423,11 @@ class Diagnosis:
                 again = self._calibrate(m, params, tuple(selected), scales, train, init, experiment=exp)
             except KilnctlError:
                 continue
-            if again.cost_ >= current.cost_ * (1 - 1e-9):
+            if again.cost_ >= current.cost_ * (1 - REANCHOR_GAIN):
                 # the structure cannot reach the candidate's fit: the effect earns its gain
                 return current, results
             say(f"  the current model fits better from {best.effect}'s base values "
-                f"(cost {current.cost_:.4g} -> {again.cost_:.4g}): candidates judged again")
+                f"(cost {current.cost_:.5g} -> {again.cost_:.5g}): candidates judged again")
             current = again
             results = [self._evidence(m, r.effect, r.calibration, current, scales, train, test, exp, r.wall_s)
                        if r.calibration is not None else r for r in results]
