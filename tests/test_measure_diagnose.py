@@ -39,7 +39,7 @@ def test_hidden_second_motor_is_found_and_its_inertia_recovered(second_motor_cas
 def test_json_has_the_documented_keys(second_motor_case):
     _, _, d = second_motor_case
     out = json.loads(json.dumps(d.to_dict(), allow_nan=False))
-    for key in ("baseline", "ranking", "selected", "final", "unexplained"):
+    for key in ("baseline", "ranking", "selected", "final", "unexplained", "caveats"):
         assert key in out
     r = out["ranking"][0]
     for key in ("effect", "delta_bic", "fit_percent", "parameters", "on_bound"):
@@ -143,3 +143,14 @@ def test_a_candidate_whose_gain_is_a_better_base_fit_is_not_supported():
     current, results = d._reanchor(m, params, [], poor, [r], scales, train, test, exp, lambda s: None)
     assert current.cost_ < poor.cost_
     assert not results[0].supported
+
+
+def test_unbalance_in_a_record_shorter_than_a_revolution_comes_with_a_caution():
+    # truth: the plant has an unbalance of 3e5 N m; the record (20 s) is a sixth of a kiln revolution
+    # (60 n / omega_ref = 129 s with Table 1), where the unbalance is a slow drift a sensor offset also makes
+    m, _ = make_record(("kiln_unbalance",), seed=4, magnitudes={"T_unb": 3e5, "phi_unb": 1.0}, t_end=20.0)
+    d = Diagnosis(SETUP, candidates=["kiln_unbalance"]).fit(m)
+    assert d.selected_ == ["kiln_unbalance"]
+    assert any("slow drift" in c and "129 s" in c for c in d.caveats_)
+    assert d.to_dict()["caveats"] == d.caveats_
+    assert "caution: kiln_unbalance" in d.summary()

@@ -178,6 +178,11 @@ class Diagnosis:
         The final model's calibration on the whole record.
     comparison_base_, comparison_final_ : Comparison
         Comparisons of the base and final models with the record.
+    caveats_ : list of str
+        Warnings about selected effects: a kiln unbalance found in a record
+        shorter than a kiln revolution (there it is a slow drift, like a
+        sensor offset), or evidence that is weak once the residual's
+        autocorrelation is allowed for.
     unexplained_ : dict or None
         Signature of what the final model still misses, or None.
     wall_s_ : float
@@ -327,11 +332,36 @@ class Diagnosis:
                                              params=final.params_)
         self.signature_ = residual_signature(self.comparison_final_, params.n)
         self.unexplained_ = self.signature_ if self.signature_["structured"] else None
+        self.caveats_ = self._caveats(m, exp, params)
         self.measurement_ = m
         self.wall_s_ = time.perf_counter() - wall0
         say(f"final: {_fmt_fit(self.final_)} with {', '.join(selected) or 'no effect added'} "
             f"({self.wall_s_:.1f} s)")
         return self
+
+    def _caveats(self, m, exp, params) -> list[str]:
+        """Warnings about selected effects whose evidence is weaker than the criteria suggest."""
+        out = []
+        span = float(m.t[-1] - exp.t0)
+        for i, name in enumerate(self.selected_):
+            r = next((c for c in self.rounds_[i] if c.effect == name), None)
+            if r is None:
+                continue
+            weak = not (r.delta_bic_corrected < -self.min_delta_bic)
+            period = 60.0 * params.n / exp.omega_ref  # one kiln revolution at the set speed [s]
+            if name == "kiln_unbalance" and span < period:
+                out.append(f"kiln_unbalance was selected on a record of {span:.0f} s, {span / period:.2f} of a kiln "
+                           f"revolution ({period:.0f} s): there it is a slow drift, which a current-sensor offset or "
+                           "gain error, or slowly correlated noise, also produce"
+                           + (f"; its evidence is weak once the residual's autocorrelation is allowed for "
+                              f"(corrected dBIC {r.delta_bic_corrected:+.1f})" if weak else "")
+                           + ". A record longer than one revolution tells them apart.")
+            elif weak:
+                out.append(f"{name}: the evidence is weak once the residual's autocorrelation is allowed for "
+                           f"(corrected dBIC {r.delta_bic_corrected:+.1f} against the threshold "
+                           f"{-self.min_delta_bic:g}); small effects (a few-millisecond sensor lag, a stiff drive "
+                           "train) are often like this, but so is an effect that fits slow noise.")
+        return out
 
     def _try(self, m, params, selected, name, current, scales, train, test, exp) -> CandidateResult:
         eff = CATALOGUE[name]
@@ -495,6 +525,7 @@ class Diagnosis:
             "final": {k: _num(v) for k, v in self.final_.items()},
             "final_parameters": _params_dict(fc),
             "unexplained": _jsonable(self.unexplained_),
+            "caveats": list(self.caveats_),
             "residual_signature": _jsonable(self.signature_),
             "failing_before": self.comparison_base_.failing,
             "failing_after": self.comparison_final_.failing,
@@ -542,6 +573,8 @@ class Diagnosis:
         lines.append("  " + self.headline())
         if self.unexplained_:
             lines.append("  unexplained residual: " + self.unexplained_["text"])
+        for c in self.caveats_:
+            lines.append("  caution: " + c)
         return "\n".join(lines)
 
     def plot(self, fig=None):
@@ -658,6 +691,8 @@ class Diagnosis:
         parts = [f'<p class="big">{esc(self.headline())}</p>']
         if self.unexplained_:
             parts.append(f'<p class="big warn">Unexplained: {esc(self.unexplained_["text"])}</p>')
+        for c in self.caveats_:
+            parts.append(f'<p class="warn">Caution: {esc(c)}</p>')
         parts.append("<h2>Measured, calibrated base and final model</h2>")
         parts.append("<p>Shaded: intervals where the base model's |residual| exceeds 3 sigma. "
                      "Dashed lines: phases of the start-up.</p>")
