@@ -123,7 +123,8 @@ def _foreign(job):
     return {"name": name, "expected": expected, "selected": list(d.selected_),
             "first": d.ranking_[0].effect if d.ranking_ and d.ranking_[0].supported else None,
             "baseline_fit": d.baseline_["current_A"], "final_fit": d.final_["current_A"],
-            "unexplained": (d.unexplained_ or {}).get("hint"), "wall_s": time.perf_counter() - t0}
+            "unexplained": (d.unexplained_ or {}).get("hint"), "caveats": list(d.caveats_),
+            "wall_s": time.perf_counter() - t0}
 
 
 def _guarded(fn_job):
@@ -173,7 +174,8 @@ def main(argv=None) -> int:
             ok = (r["selected"] == [] if r["expected"] is None else r["first"] == r["expected"])
             print(f"{r['name'][:71]:<72}{str(r['expected']):>22}  {', '.join(r['selected']) or '-'}"
                   f"  {'OK ' if ok else 'MISS'} fit {r['baseline_fit']:.1f} -> {r['final_fit']:.1f} %"
-                  + (f"  unexplained: {r['unexplained']}" if r["unexplained"] else ""))
+                  + (f"  unexplained: {r['unexplained']}" if r["unexplained"] else "")
+                  + "".join(f"\n      caution: {c}" for c in r.get("caveats", [])))
         if args.json:
             with open(args.json, "w") as fh:
                 json.dump(res, fh, indent=1, default=float)

@@ -236,7 +236,7 @@ class Diagnosis:
         else:
             horizons = sorted(set(hz) | {1.0})
         sep = CATALOGUE[new_effect].separation if new_effect else 1.0
-        # the widest smoothing any effect of the structure asks for (its events must stay aligned in every refit)
+        # the smoothing widths of every effect in the structure (their events must stay aligned in every refit)
         smoothing = tuple(sorted({w for e in effects for w in CATALOGUE[e].smoothing}, reverse=True)) or (0.0,)
         return cal.fit(m, mask=mask, init=init, starts=list(starts), experiment=experiment, horizons=horizons,
                        n_local=self.n_local if new_effect else 1, separation=sep, smoothing=smoothing)
@@ -434,8 +434,8 @@ class Diagnosis:
         A candidate's refit searches the base parameters again (grid, several starts), and may find a better
         optimum of them than the current model's fit did: its gain is then the current structure's own, and
         the effect's parameters sit at their null value (a second motor of 0.003 kg m^2, a rigid "compliance").
-        The current structure is refitted from the candidate's base values; when that lowers its cost, it
-        becomes the current model and every candidate is judged again against it.
+        The current structure is refitted from the candidate's base values; when that lowers its cost by more
+        than :data:`REANCHOR_GAIN`, it becomes the current model and every candidate is judged again against it.
 
         Returns
         -------
