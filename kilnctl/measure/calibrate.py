@@ -599,7 +599,6 @@ class Calibration:
                     nfev += n_ev
             set_smoothing(0.0)
             results.append((trial(u).cost, u, J, msg))
-            set_smoothing(widths[0])
         set_smoothing(0.0)
         _, u, J, msg = min(results, key=lambda r: r[0])
         if not space.coords:
