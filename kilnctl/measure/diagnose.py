@@ -348,14 +348,14 @@ class Diagnosis:
             if r is None:
                 continue
             weak = not (r.delta_bic_corrected < -self.min_delta_bic)
-            period = 60.0 * params.n / exp.omega_ref  # one kiln revolution at the set speed [s]
-            if name == "kiln_unbalance" and span < period:
-                out.append(f"kiln_unbalance was selected on a record of {span:.0f} s, {span / period:.2f} of a kiln "
-                           f"revolution ({period:.0f} s): there it is a slow drift, which a current-sensor offset or "
-                           "gain error, or slowly correlated noise, also produce"
+            eff = CATALOGUE[name]
+            period = eff.period(params, exp.omega_ref) if eff.period is not None else math.inf
+            if span < period:
+                out.append(f"{name} was selected on a record of {span:.0f} s, {span / period:.2f} of its period "
+                           f"({period:.0f} s): there it is {eff.short_record_note}"
                            + (f"; its evidence is weak once the residual's autocorrelation is allowed for "
                               f"(corrected dBIC {r.delta_bic_corrected:+.1f})" if weak else "")
-                           + ". A record longer than one revolution tells them apart.")
+                           + ". A record longer than one period tells them apart.")
             elif weak:
                 out.append(f"{name}: the evidence is weak once the residual's autocorrelation is allowed for "
                            f"(corrected dBIC {r.delta_bic_corrected:+.1f} against the threshold "

@@ -165,6 +165,13 @@ class Effect:
         :meth:`~kilnctl.measure.calibrate.Calibration.fit`): for effects whose
         trace is a short event or a jump whose time depends on the
         parameters.  Every refit of a structure with the effect uses them.
+    period : callable or None
+        ``period(params, omega_ref) -> float``: the period of the effect's
+        signature [s] when it is periodic.  In a record shorter than that
+        the signature is only part of a cycle, which other causes also
+        produce; the diagnosis then adds ``short_record_note`` as a caution.
+    short_record_note : str
+        What else makes the signature in such a short record.
     """
 
     name: str
@@ -181,6 +188,8 @@ class Effect:
     grid_points: int = 24
     separation: float = 1.0
     smoothing: tuple = (0.0,)
+    period: Callable | None = field(repr=False, default=None)
+    short_record_note: str = ""
 
     def applicable(self, params: Parameters, model: str) -> str | None:
         """Return None if the effect can be added to this base, else the reason it cannot.
@@ -355,6 +364,9 @@ CATALOGUE: dict[str, Effect] = {e.name: e for e in [
         "about 130 s at 500 rpm): in a short record, a slowly rising or falling offset",
         starts=lambda params, m: [{"T_unb": 1e4, "phi_unb": 0.0}],
         plausible={"T_unb": (1e5, 4e5), "phi_unb": (0.0, 2 * math.pi)},
+        period=lambda params, omega_ref: 60.0 * params.n / omega_ref,  # one kiln revolution at the set speed
+        short_record_note="a slow drift, which a current-sensor offset or gain error, or slowly correlated "
+                          "noise, also produce",
         notes="fitted as the pair (T cos phi, T sin phi), which is linear in the torque; T_unb and phi_unb "
               "and their standard errors follow."),
     Effect(
