@@ -101,8 +101,15 @@ def test_interrupted_sweep_writes_nothing_and_resumes(tmp_path, capsys, monkeypa
 
 def test_threshold_prints_the_exceedance(tmp_path, capsys):
     spec = _write(tmp_path, SPEC.replace('["final_current_A", "peak_stress_Pa"]', '["peak_stress_Pa"]'))
-    assert cli(["sweep", str(spec), "--executor", "serial", "--no-cache", "--threshold", "150e6", "--quiet"]) == 0
-    assert "above 1.5e+08: 1 of 3 points" in capsys.readouterr().out  # only 900 t exceeds (stress ~ m_v)
+    assert cli(["sweep", str(spec), "--executor", "serial", "--no-cache", "--threshold", "150", "--quiet"]) == 0
+    assert "above 150.0 MPa: 1 of 3 points" in capsys.readouterr().out  # only 900 t exceeds (stress ~ m_v)
+
+
+def test_threshold_in_pa_is_refused_with_the_mpa_value(tmp_path, capsys):
+    # kilnctl 0.1 took --threshold in Pa: 150e6 now means 150e6 MPa; the message gives the MPa value instead
+    spec = _write(tmp_path, SPEC.replace('["final_current_A", "peak_stress_Pa"]', '["peak_stress_Pa"]'))
+    assert cli(["sweep", str(spec), "--executor", "serial", "--no-cache", "--threshold", "150e6", "--quiet"]) == 2
+    assert "give --threshold 150 if you meant 1.5e+08 Pa" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("body, message", [

@@ -19,6 +19,27 @@ COMMANDS = ("params_cmd", "design_cmd", "simulate_cmd", "verify_cmd", "optimize_
             "diagnose_cmd", "sweep_cmd")
 
 
+class _Parser(argparse.ArgumentParser):
+    """An argument parser that reports an unknown option with the usage of the subcommand it was given to.
+
+    argparse hands the arguments a subcommand does not know back to the top-level
+    parser, which would print ``usage: kilnctl [-h] COMMAND ...``; a user who
+    typed ``kilnctl sweep --treshold`` needs the usage of ``sweep`` instead.
+    """
+
+    def parse_args(self, args=None, namespace=None):
+        """Parse like argparse, but refuse unknown arguments with the subcommand's usage."""
+        ns, extras = self.parse_known_args(args, namespace)
+        if extras:
+            where = self
+            for action in self._actions:
+                if isinstance(action, argparse._SubParsersAction):
+                    where = action.choices.get(getattr(ns, action.dest, None), self)
+            where.error("unrecognized arguments: " + " ".join(extras)
+                        + f" (see {where.prog} --help)")
+        return ns
+
+
 def build_parser() -> argparse.ArgumentParser:
     """Return the argument parser with every available subcommand.
 
@@ -26,8 +47,10 @@ def build_parser() -> argparse.ArgumentParser:
     -------
     argparse.ArgumentParser
     """
-    parser = argparse.ArgumentParser(
-        prog="kilnctl", description="Control design and tuning of rotary-kiln drives.")
+    from .. import __version__
+
+    parser = _Parser(prog="kilnctl", description="Control design and tuning of rotary-kiln drives.")
+    parser.add_argument("--version", action="version", version=f"kilnctl {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name in COMMANDS:
         try:

@@ -24,9 +24,9 @@ def register(sub) -> None:
     """
     p = sub.add_parser(
         "compare", help="compare the model with a measured start-up: fit %%, residual tests, where it fails",
-        description="Simulate the experiment of a measured record (docs/measurements.md) and compare: fit %% "
+        description="Simulate the experiment of a measured record (docs/measurements.md) and compare: fit % "
                     "per channel as MATLAB's compare defines it, residual whiteness and cross-correlation with "
-                    "99 %% bands, residual spectrum, and the intervals where |residual| > 3 sigma.")
+                    "99 % bands, residual spectrum, and the intervals where |residual| > 3 sigma.")
     p.add_argument("--data", required=True, metavar="FILE", help="measured record (CSV: time_s, current_A, speed_rpm "
                    "[, speed_ref_rpm])")
     p.add_argument("--config", metavar="FILE", help="setup of the experiment (kilnctl TOML parameter file, "

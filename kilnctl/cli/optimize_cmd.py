@@ -36,7 +36,7 @@ def register(sub) -> None:
     p = sub.add_parser(
         "optimize-ramp", help="optimize the start-up ramp for least gear stress (verified on the hybrid plant)",
         description="Find the speed-reference ramp that gives the least girth-gear bending stress during the "
-                    "start-up while the motor still reaches 95 %% of its set point by --t-max, with the armature "
+                    "start-up while the motor still reaches 95 % of its set point by --t-max, with the armature "
                     "current and voltage within the drive's limits; verify it on the exact hybrid plant.")
     add_config_arg(p)
     p.add_argument("--t-max", type=float, default=10.0, metavar="S",

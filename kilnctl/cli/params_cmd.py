@@ -13,7 +13,12 @@ def register(sub) -> None:
     ----------
     sub : argparse._SubParsersAction
     """
-    p = sub.add_parser("params", help="print the parameter set with units and sources")
+    p = sub.add_parser(
+        "params", help="print the parameter set with units and sources",
+        description="Print every parameter of the plant and controller (the paper's Table 1, overridden by "
+                    "--config) with its value, unit, source (Table 1, an equation of the paper, or an "
+                    "assumption and why) and meaning; '*' marks values changed from the default. Use it to "
+                    "check a configuration file before a run.")
     add_config_arg(p)
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
     p.set_defaults(func=run)

@@ -9,6 +9,7 @@ the figure are written whole or not at all, after every point has finished.
 
 from __future__ import annotations
 
+import math
 import sys
 from pathlib import Path
 
@@ -41,8 +42,9 @@ def register(sub) -> None:
     p.add_argument("--out", metavar="FILE", help="write the result table (.csv or .json)")
     p.add_argument("--plot", metavar="FILE", help="write the sweep figure (format from the extension)")
     p.add_argument("--threshold", type=float, default=None, metavar="VALUE",
-                   help="a limit on the first output, in its unit (e.g. an allowable stress in Pa): drawn in "
-                        "the figure, and the fraction of points above it is printed")
+                   help="a limit on the first output, in the unit the summary prints it in (a stress in MPa, "
+                        "e.g. 205.6; a current in A; a time in s): drawn in the figure, and the fraction of "
+                        "points above it is printed")
     p.add_argument("--cache", metavar="DIR", default=str(DEFAULT_CACHE),
                    help=f"folder of finished points (default {DEFAULT_CACHE})")
     p.add_argument("--no-cache", action="store_true", help="neither read nor store finished points")
@@ -77,6 +79,43 @@ def _check_outputs(args) -> None:
                                   + ", ".join(sorted(kinds)))
 
 
+#: a stress threshold above this many MPa was meant in Pa (kilnctl 0.1 took --threshold in Pa)
+_MPA_SANITY = 1e5
+
+
+def threshold_si(output: str, value: float | None) -> float | None:
+    """Return ``--threshold`` in the SI unit of ``output`` (it is given in the unit the summary prints).
+
+    Parameters
+    ----------
+    output : str
+        The output the threshold applies to (the study's first output).
+    value : float or None
+        The threshold as typed: MPa for a ``*_Pa`` output, the output's own unit otherwise.
+
+    Returns
+    -------
+    float or None
+        The threshold in the output's SI unit [Pa, A, s ...].
+
+    Raises
+    ------
+    ConfigFileError
+        A stress threshold so large it must have been typed in Pa, or one that is not finite.
+    """
+    if value is None:
+        return None
+    if not math.isfinite(value):
+        raise ConfigFileError(f"--threshold {value}: give a finite number")
+    if not output.endswith("_Pa"):
+        return value
+    if abs(value) >= _MPA_SANITY:
+        raise ConfigFileError(
+            f"--threshold {value:g} is read in MPa (like every stress kilnctl prints), and {value:g} MPa is not "
+            f"a gear stress: give --threshold {value / 1e6:g} if you meant {value:g} Pa")
+    return value * 1e6
+
+
 def _fmt(name: str, v: float) -> str:
     if name.endswith("_Pa"):
         return f"{v / 1e6:.1f} MPa"
@@ -102,6 +141,7 @@ def run(args) -> int:
     _check_outputs(args)
     study = load_spec(args.spec)
     study.parameter_sets()  # every point is checked before anything runs
+    threshold = threshold_si(study.outputs[0], args.threshold)
     if args.dry_run:
         print(study.describe())
         return 0
@@ -121,10 +161,10 @@ def run(args) -> int:
     if args.plot:
         from matplotlib.figure import Figure
 
-        save_figure(result.plot(threshold=args.threshold, fig=Figure(figsize=(11, 7))), args.plot)
+        save_figure(result.plot(threshold=threshold, fig=Figure(figsize=(11, 7))), args.plot)
     s = result.summary()
-    if args.threshold is not None:
-        s["exceedance"] = result.exceedance(result.outputs[0], args.threshold)
+    if threshold is not None:
+        s["exceedance"] = result.exceedance(result.outputs[0], threshold)
     if args.json:
         print_json(s)
         return 0
@@ -141,7 +181,8 @@ def run(args) -> int:
                   f"at {where}")
     if "exceedance" in s:
         e = s["exceedance"]
-        print(f"  above {args.threshold:g}: {e['n_exceed']} of {e['n']} points, P = {e['probability']:.3f} "
+        print(f"  above {_fmt(result.outputs[0], threshold)}: {e['n_exceed']} of {e['n']} points, "
+              f"P = {e['probability']:.3f} "
               f"(95 % interval {e['ci_low']:.3f} to {e['ci_high']:.3f})")
     if i["n_failed"]:
         first = result.table[result.table["status"] != "ok"].iloc[0]

@@ -16,7 +16,13 @@ def register(sub) -> None:
     ----------
     sub : argparse._SubParsersAction
     """
-    p = sub.add_parser("verify", help="run the designed gains on the nonlinear plant and compare with the design")
+    p = sub.add_parser(
+        "verify", help="run the designed gains on the nonlinear plant and compare with the design",
+        description="Simulate the start-up ramp with the PID gains (designed by root locus, or given in "
+                    "--config) on the nonlinear plant and print it beside the linear prediction of the design "
+                    "(stick and slip): overshoot, settling time, lag behind the ramp, peak and final current; "
+                    "then say where and why the two part (load torque, burden breakaway, drive limits, "
+                    "backlash). See docs/tutorial_verify.md.")
     add_config_arg(p)
     p.add_argument("--model", choices=("macro", "micro"), default="macro", help="nonlinear model (default macro)")
     p.add_argument("--t-end", type=float, default=40.0, metavar="S", help="simulated time [s] (default 40)")
