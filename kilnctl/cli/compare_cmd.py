@@ -85,17 +85,9 @@ def run(args) -> int:
     c = compare(data, params, model=args.model, effects=effects, t0=setup.options.get("t0_s"))
     d = c.to_dict()
     if args.report:
-        from ..measure.report import esc, figure_tag, page, write_report_files
+        from ..measure.report import write_comparison_report
 
-        fig = c.plot()
-        import io
-
-        buf = io.BytesIO()
-        fig.savefig(buf, format="png", dpi=110)
-        body = ("<pre>" + esc("\n".join(c.summary_lines())) + "</pre>\n" + figure_tag(fig, "measured vs model"))
-        write_report_files(args.report, {"compare.html": page(f"kilnctl compare: {c.source}", body),
-                                         "compare.json": d, "compare.png": buf.getvalue()},
-                           protect=(args.data, args.config))
+        write_comparison_report(c, args.report, protect=(args.data, args.config))
     if args.json:
         print_json(d)
         return 0

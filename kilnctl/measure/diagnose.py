@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import KilnctlError, ModelError, NotFittedError, close_matches_hint
-from ..params import SPECS, Parameters
+from ..params import Parameters
 from ..simulate import resolve_gains
 from .calibrate import Calibration, holdout_masks
 from .compare import Comparison, compare_run
@@ -38,6 +38,8 @@ from .effects import CATALOGUE, effect_components, grid_starts
 from .io import Measurement
 from .runner import CHANNELS, kiln_angle
 from .stats import failing_intervals, fit_percent, residual_spectrum, robust_sigma
+from . import report as _report
+from .report import format_fit as _fmt_fit, json_number as _num, unit_of as _unit
 
 __all__ = ["Diagnosis", "CandidateResult", "residual_signature", "DEFAULT_CALIBRATE"]
 
@@ -115,13 +117,6 @@ class CandidateResult:
                 "supported": self.supported, "reason": self.reason, "wall_s": self.wall_s,
                 "heldout_share": _num(self.heldout_share), "delta_bic_corrected": _num(self.delta_bic_corrected)}
 
-
-def _num(v):
-    return None if v is None or not math.isfinite(v) else float(v)
-
-
-def _unit(name):
-    return SPECS[name].unit if name in SPECS else ""
 
 
 class Diagnosis:
@@ -514,68 +509,17 @@ class Diagnosis:
             ``settings``.
         """
         self._check_fitted()
-        fc = self.final_calibration_
-        return {
-            "source": self.measurement_.source,
-            "baseline": {k: _num(v) for k, v in self.baseline_.items()},
-            "baseline_parameters": _params_dict(self.base_calibration_),
-            "ranking": [r.to_dict() for r in self.ranking_],
-            "rounds": [[r.to_dict() for r in rnd] for rnd in self.rounds_],
-            "selected": list(self.selected_),
-            "final": {k: _num(v) for k, v in self.final_.items()},
-            "final_parameters": _params_dict(fc),
-            "unexplained": _jsonable(self.unexplained_),
-            "caveats": list(self.caveats_),
-            "residual_signature": _jsonable(self.signature_),
-            "failing_before": self.comparison_base_.failing,
-            "failing_after": self.comparison_final_.failing,
-            "experiment": self.experiment_.to_dict(),
-            "settings": {"calibrate": list(self.calibrate), "candidates": list(self.candidates), "model": self.model,
-                         "holdout": self.holdout, "holdout_fraction": self.holdout_fraction,
-                         "min_delta_bic": self.min_delta_bic, "min_holdout_gain_percent": self.min_holdout_gain},
-            "wall_s": self.wall_s_,
-        }
+        return _report.diagnosis_dict(self)
 
     def headline(self) -> str:
         """One sentence: how the error fell and what was added."""
         self._check_fitted()
-        c0, c1 = self.baseline_["current_A"], self.final_["current_A"]
-        if not self.selected_:
-            s = f"no catalogued effect is supported by the data; current fit {c0:.1f} % with the calibrated base model"
-            if self.unexplained_:
-                s += f"; the residual still has structure ({self.unexplained_['hint']})"
-            return s
-        fc = self.final_calibration_
-        parts = []
-        for e in self.selected_:
-            for fp in CATALOGUE[e].parameters:
-                for k in (fp.name, fp.partner):
-                    if k and k in fc.values_:
-                        parts.append(f"{k} = {_fmt_val(fc.values_[k], fc.stderr_[k])} {_unit(k)}".rstrip())
-        return (f"current fit rose from {c0:.1f} % to {c1:.1f} % after adding {', '.join(self.selected_)}"
-                + (f", {', '.join(parts)}" if parts else ""))
+        return _report.diagnosis_headline(self)
 
     def summary(self) -> str:
         """Return a readable account of the diagnosis."""
         self._check_fitted()
-        lines = [f"diagnosis of {self.measurement_.source} ({self.wall_s_:.0f} s)",
-                 f"  baseline (calibrated {', '.join(self.calibrate)}): {_fmt_fit(self.baseline_)}"]
-        for i, rnd in enumerate(self.rounds_):
-            lines.append(f"  round {i + 1}: candidates against "
-                         + ("the base" if i == 0 else "base + " + ", ".join(self.selected_[:i])))
-            lines.append(f"    {'effect':<22} {'dBIC':>10} {'held-out':>9} {'fit I %':>8}  verdict")
-            for r in rnd:
-                fi = r.fit_percent.get("current_A", math.nan)
-                lines.append(f"    {r.effect:<22} {r.delta_bic:>10.1f} {r.holdout_gain:>8.1f}% {fi:>8.1f}  "
-                             f"{'SUPPORTED' if r.supported else r.reason}")
-        lines.append(f"  selected: {', '.join(self.selected_) or 'nothing'}")
-        lines.append(f"  final: {_fmt_fit(self.final_)}")
-        lines.append("  " + self.headline())
-        if self.unexplained_:
-            lines.append("  unexplained residual: " + self.unexplained_["text"])
-        for c in self.caveats_:
-            lines.append("  caution: " + c)
-        return "\n".join(lines)
+        return _report.diagnosis_summary(self)
 
     def plot(self, fig=None):
         """Measured vs base vs final model, residuals, correlation and spectrum (failing intervals shaded).
@@ -589,9 +533,7 @@ class Diagnosis:
         matplotlib.figure.Figure
         """
         self._check_fitted()
-        return self.comparison_base_.plot(fig=fig, compare_with=self.comparison_final_,
-                                          labels=("calibrated base", "final: base + " + (", ".join(self.selected_) or
-                                                                                         "nothing")))
+        return _report.plot_diagnosis(self, fig)
 
     def plot_ranking(self, fig=None):
         """Bar charts: delta BIC and held-out gain of each first-round candidate, and fit before/after.
@@ -604,43 +546,8 @@ class Diagnosis:
         -------
         matplotlib.figure.Figure
         """
-        from matplotlib.figure import Figure
-
         self._check_fitted()
-        fig = fig or Figure(figsize=(13, 3.6))
-        a0, a1, a2 = fig.subplots(1, 3, gridspec_kw={"width_ratios": [3, 3, 2]})
-        rk = self.ranking_
-        names = [r.effect for r in rk]
-        colors = ["C2" if r.supported else "C7" for r in rk]
-        y = np.arange(len(rk))
-        dbic = [max(-1e6, r.delta_bic) if math.isfinite(r.delta_bic) else 0 for r in rk]
-        a0.barh(y, [-d for d in dbic], color=colors)
-        a0.set_xscale("symlog", linthresh=10)
-        a0.axvline(self.min_delta_bic, color="k", ls=":")
-        a0.set_yticks(y, names, fontsize=8)
-        a0.invert_yaxis()
-        a0.set_title("-dBIC (fitting part), threshold dotted", fontsize=9)
-        a1.barh(y, [max(-100.0, r.holdout_gain) if math.isfinite(r.holdout_gain) else 0 for r in rk], color=colors)
-        a1.set_xlim(-105, 105)
-        a1.axvline(self.min_holdout_gain, color="k", ls=":")
-        a1.set_yticks(y, [""] * len(y))
-        a1.invert_yaxis()
-        a1.set_title("held-out gain [%] (cut at -100), threshold dotted", fontsize=9)
-        chans = list(self.baseline_)
-        x = np.arange(len(chans))
-        a2.bar(x - 0.2, [self.baseline_[c] for c in chans], 0.4, label="calibrated base", color="C0")
-        a2.bar(x + 0.2, [self.final_[c] for c in chans], 0.4, label="final", color="C3")
-        for i, c in enumerate(chans):
-            a2.text(i - 0.2, self.baseline_[c], f"{self.baseline_[c]:.1f}", ha="center", va="bottom", fontsize=8)
-            a2.text(i + 0.2, self.final_[c], f"{self.final_[c]:.1f}", ha="center", va="bottom", fontsize=8)
-        a2.set_xticks(x, chans)
-        lo = min(min(self.baseline_.values()), min(self.final_.values()))
-        a2.set_ylim(max(0.0, lo - 10), 102)
-        a2.set_title("fit % before and after", fontsize=9)
-        a2.legend(fontsize=8, loc="lower right")
-        fig.suptitle(self.headline(), fontsize=10)
-        fig.tight_layout()
-        return fig
+        return _report.plot_ranking(self, fig)
 
     def report(self, folder, protect=()) -> list:
         """Write ``diagnose.html`` (self-contained), ``diagnose.json`` and the figures into a folder.
@@ -657,19 +564,8 @@ class Diagnosis:
         list of Path
             Files written (each whole or not at all).
         """
-        from .report import write_report_files
-
         self._check_fitted()
-        import io
-
-        figs = {"diagnose_signals.png": self.plot(), "diagnose_ranking.png": self.plot_ranking()}
-        pngs = {}
-        for name, fig in figs.items():
-            buf = io.BytesIO()
-            fig.savefig(buf, format="png", dpi=100)
-            pngs[name] = buf.getvalue()
-        return write_report_files(folder, {"diagnose.html": self.html(figs), "diagnose.json": self.to_dict(), **pngs},
-                                  protect=protect)
+        return _report.write_diagnosis_report(self, folder, protect)
 
     def html(self, figs=None) -> str:
         """Return the report as one self-contained HTML page.
@@ -683,50 +579,8 @@ class Diagnosis:
         -------
         str
         """
-        from .report import esc, figure_tag, page, table
-
         self._check_fitted()
-        figs = figs or {"s": self.plot(), "r": self.plot_ranking()}
-        f_sig, f_rank = list(figs.values())
-        parts = [f'<p class="big">{esc(self.headline())}</p>']
-        if self.unexplained_:
-            parts.append(f'<p class="big warn">Unexplained: {esc(self.unexplained_["text"])}</p>')
-        for c in self.caveats_:
-            parts.append(f'<p class="warn">Caution: {esc(c)}</p>')
-        parts.append("<h2>Measured, calibrated base and final model</h2>")
-        parts.append("<p>Shaded: intervals where the base model's |residual| exceeds 3 sigma. "
-                     "Dashed lines: phases of the start-up.</p>")
-        parts.append(figure_tag(f_sig, "signals and residuals"))
-        rows = [(f["channel"], f["text"]) for f in self.comparison_base_.failing]
-        parts.append("<h3>Where the base model fails</h3>" + (table(["channel", "interval"], rows, left=2)
-                                                                if rows else "<p>nowhere beyond 3 sigma</p>"))
-        rows = [(f["channel"], f["text"]) for f in self.comparison_final_.failing]
-        parts.append("<h3>Where the final model fails</h3>" + (table(["channel", "interval"], rows, left=2)
-                                                                 if rows else "<p>nowhere beyond 3 sigma</p>"))
-        parts.append("<h2>Candidates</h2>")
-        parts.append(figure_tag(f_rank, "ranking"))
-        for i, rnd in enumerate(self.rounds_):
-            parts.append(f"<h3>Round {i + 1}: against " + esc("the calibrated base" if i == 0 else
-                                                              "base + " + ", ".join(self.selected_[:i])) + "</h3>")
-            rows, sel = [], set()
-            for j, r in enumerate(rnd):
-                if r.supported and j == 0:
-                    sel.add(j)
-                pars = "; ".join(f"{k} = {_fmt_val(v['value'], v['stderr'])} {v['unit']}".rstrip()
-                                 for k, v in r.parameters.items() if k in _effect_params(r.effect))
-                rows.append((r.effect, f"{r.delta_bic:.1f}", f"{r.holdout_gain:+.1f}",
-                             f"{r.fit_percent.get('current_A', math.nan):.1f}",
-                             f"{r.fit_percent.get('speed_rpm', math.nan):.2f}", pars or "-",
-                             ", ".join(r.on_bound) or "-", "supported" if r.supported else r.reason))
-            parts.append(table(["effect", "dBIC", "held-out gain %", "fit I %", "fit n %", "effect parameters",
-                                "on bound", "verdict"], rows, left=1, selected=sel))
-        parts.append("<h2>Final model</h2><pre>" + esc(self.final_calibration_.summary()) + "</pre>")
-        parts.append("<h2>Residual signature of the final model</h2><pre>"
-                     + esc(self.signature_["text"]) + "</pre>")
-        for note in self.experiment_.notes:
-            parts.append(f"<p>Note: {esc(note)}</p>")
-        parts.append("<h2>Settings</h2><pre>" + esc(str(self.to_dict()["settings"])) + "</pre>")
-        return page(f"kilnctl diagnose: {self.measurement_.source}", "\n".join(parts))
+        return _report.diagnosis_html(self, figs)
 
 
 def variance_inflation(e, max_lag: int | None = None) -> float:
@@ -771,50 +625,6 @@ def _corrected_delta_bic(m, cal, current, exp, train) -> float:
     k_new = len(cal.values_) - len(current.values_)
     return float(val + k_new * math.log(max(n_eff, 2.0)))
 
-
-def _effect_params(effect):
-    out = set()
-    for fp in CATALOGUE[effect].parameters:
-        out.add(fp.name)
-        if fp.partner:
-            out.add(fp.partner)
-    return out
-
-
-def _params_dict(cal: Calibration) -> dict:
-    return {k: {"value": _num(cal.values_[k]), "stderr": _num(cal.stderr_[k]), "unit": _unit(k),
-                "on_bound": k in cal.on_bound_, "not_identifiable": k in cal.not_identifiable_} for k in cal.names_}
-
-
-def _fmt_fit(fit: dict) -> str:
-    return ", ".join(f"{k} {v:.1f} %" for k, v in fit.items())
-
-
-def _fmt_val(v, se) -> str:
-    if se is None or not math.isfinite(se):
-        return f"{v:.4g} (se n/a)"
-    if se == 0:
-        return f"{v:.4g}"
-    digits = max(0, 1 - int(math.floor(math.log10(abs(se))))) if se > 0 else 2
-    if abs(v) >= 1e5 or (abs(v) < 1e-3 and v != 0):
-        return f"{v:.3e} +- {se:.1e}"
-    return f"{v:.{digits}f} +- {se:.{digits}f}"
-
-
-def _jsonable(d):
-    if d is None:
-        return None
-    out = {}
-    for k, v in d.items():
-        if isinstance(v, float):
-            out[k] = _num(v)
-        elif isinstance(v, dict):
-            out[k] = _jsonable(v)
-        elif isinstance(v, (np.floating, np.integer)):
-            out[k] = _num(float(v))
-        else:
-            out[k] = v
-    return out
 
 
 # --- residual signature --------------------------------------------------------------------------

@@ -1,4 +1,10 @@
-"""Self-contained HTML reports: figures embedded as base64 PNG, written whole or not at all."""
+"""Presentation of measurement analyses: summaries, JSON, figures and self-contained HTML reports.
+
+The analyses (:class:`~kilnctl.measure.diagnose.Diagnosis`,
+:class:`~kilnctl.measure.compare.Comparison`) compute; this module turns their
+results into text, JSON, figures and HTML pages (figures embedded as base64
+PNG), each file written whole or not at all.
+"""
 
 from __future__ import annotations
 
@@ -6,12 +12,19 @@ import base64
 import html
 import io
 import json
+import math
 from pathlib import Path
 
-from ..errors import ConfigFileError
-from ..response import write_atomic
+import numpy as np
 
-__all__ = ["figure_tag", "table", "page", "write_report_files", "esc"]
+from ..errors import ConfigFileError
+from ..params import SPECS
+from ..response import write_atomic
+from .effects import CATALOGUE
+
+__all__ = ["figure_tag", "table", "page", "write_report_files", "esc", "json_number", "unit_of", "format_fit",
+           "diagnosis_dict", "diagnosis_headline", "diagnosis_summary", "plot_diagnosis", "plot_ranking",
+           "diagnosis_html", "write_diagnosis_report", "write_comparison_report"]
 
 _CSS = """
 body{font-family:system-ui,-apple-system,Segoe UI,sans-serif;max-width:1200px;margin:2em auto;padding:0 1em;
@@ -129,3 +142,367 @@ def write_report_files(folder, files: dict, protect=()) -> list[Path]:
             content = json.dumps(content, indent=2, allow_nan=False)
         written.append(write_atomic(path, content))
     return written
+
+
+# --- shared formatting -----------------------------------------------------------------------------
+def json_number(v):
+    """A finite float, or None for JSON (no NaN or infinity).
+
+    Parameters
+    ----------
+    v : float or None
+        Any value.
+
+    Returns
+    -------
+    float or None
+    """
+    return None if v is None or not math.isfinite(v) else float(v)
+
+
+def unit_of(name: str) -> str:
+    """Unit of a parameter of :data:`~kilnctl.params.SPECS`, '' when it has none.
+
+    Parameters
+    ----------
+    name : str
+        Parameter name.
+
+    Returns
+    -------
+    str
+    """
+    return SPECS[name].unit if name in SPECS else ""
+
+
+def format_fit(fit: dict) -> str:
+    """``current_A 97.1 %, speed_rpm 99.9 %``: fit % per channel in one line.
+
+    Parameters
+    ----------
+    fit : dict of str to float
+        Fit [%] per channel.
+
+    Returns
+    -------
+    str
+    """
+    return ", ".join(f"{k} {v:.1f} %" for k, v in fit.items())
+
+
+def _fmt_val(v, se) -> str:
+    if se is None or not math.isfinite(se):
+        return f"{v:.4g} (se n/a)"
+    if se == 0:
+        return f"{v:.4g}"
+    digits = max(0, 1 - int(math.floor(math.log10(abs(se))))) if se > 0 else 2
+    if abs(v) >= 1e5 or (abs(v) < 1e-3 and v != 0):
+        return f"{v:.3e} +- {se:.1e}"
+    return f"{v:.{digits}f} +- {se:.{digits}f}"
+
+
+def _jsonable(d):
+    if d is None:
+        return None
+    out = {}
+    for k, v in d.items():
+        if isinstance(v, float):
+            out[k] = json_number(v)
+        elif isinstance(v, dict):
+            out[k] = _jsonable(v)
+        elif isinstance(v, (np.floating, np.integer)):
+            out[k] = json_number(float(v))
+        else:
+            out[k] = v
+    return out
+
+
+def _effect_params(effect):
+    out = set()
+    for fp in CATALOGUE[effect].parameters:
+        out.add(fp.name)
+        if fp.partner:
+            out.add(fp.partner)
+    return out
+
+
+def _params_dict(cal) -> dict:
+    return {k: {"value": json_number(cal.values_[k]), "stderr": json_number(cal.stderr_[k]), "unit": unit_of(k),
+                "on_bound": k in cal.on_bound_, "not_identifiable": k in cal.not_identifiable_} for k in cal.names_}
+
+
+# --- diagnosis ----------------------------------------------------------------------------------------
+def diagnosis_dict(d) -> dict:
+    """Return a fitted diagnosis as a JSON-ready dictionary.
+
+    Parameters
+    ----------
+    d : Diagnosis
+        A fitted :class:`~kilnctl.measure.diagnose.Diagnosis`.
+
+    Returns
+    -------
+    dict
+        See :meth:`Diagnosis.to_dict <kilnctl.measure.diagnose.Diagnosis.to_dict>`.
+    """
+    fc = d.final_calibration_
+    return {
+        "source": d.measurement_.source,
+        "baseline": {k: json_number(v) for k, v in d.baseline_.items()},
+        "baseline_parameters": _params_dict(d.base_calibration_),
+        "ranking": [r.to_dict() for r in d.ranking_],
+        "rounds": [[r.to_dict() for r in rnd] for rnd in d.rounds_],
+        "selected": list(d.selected_),
+        "final": {k: json_number(v) for k, v in d.final_.items()},
+        "final_parameters": _params_dict(fc),
+        "unexplained": _jsonable(d.unexplained_),
+        "caveats": list(d.caveats_),
+        "residual_signature": _jsonable(d.signature_),
+        "failing_before": d.comparison_base_.failing,
+        "failing_after": d.comparison_final_.failing,
+        "experiment": d.experiment_.to_dict(),
+        "settings": {"calibrate": list(d.calibrate), "candidates": list(d.candidates), "model": d.model,
+                     "holdout": d.holdout, "holdout_fraction": d.holdout_fraction,
+                     "min_delta_bic": d.min_delta_bic, "min_holdout_gain_percent": d.min_holdout_gain},
+        "wall_s": d.wall_s_,
+    }
+
+
+def diagnosis_headline(d) -> str:
+    """One sentence: how the error fell and what was added.
+
+    Parameters
+    ----------
+    d : Diagnosis
+        A fitted diagnosis.
+
+    Returns
+    -------
+    str
+    """
+    c0, c1 = d.baseline_["current_A"], d.final_["current_A"]
+    if not d.selected_:
+        s = f"no catalogued effect is supported by the data; current fit {c0:.1f} % with the calibrated base model"
+        if d.unexplained_:
+            s += f"; the residual still has structure ({d.unexplained_['hint']})"
+        return s
+    fc = d.final_calibration_
+    parts = []
+    for e in d.selected_:
+        for fp in CATALOGUE[e].parameters:
+            for k in (fp.name, fp.partner):
+                if k and k in fc.values_:
+                    parts.append(f"{k} = {_fmt_val(fc.values_[k], fc.stderr_[k])} {unit_of(k)}".rstrip())
+    return (f"current fit rose from {c0:.1f} % to {c1:.1f} % after adding {', '.join(d.selected_)}"
+            + (f", {', '.join(parts)}" if parts else ""))
+
+
+def diagnosis_summary(d) -> str:
+    """Return a readable account of a fitted diagnosis.
+
+    Parameters
+    ----------
+    d : Diagnosis
+        A fitted diagnosis.
+
+    Returns
+    -------
+    str
+    """
+    lines = [f"diagnosis of {d.measurement_.source} ({d.wall_s_:.0f} s)",
+             f"  baseline (calibrated {', '.join(d.calibrate)}): {format_fit(d.baseline_)}"]
+    for i, rnd in enumerate(d.rounds_):
+        lines.append(f"  round {i + 1}: candidates against "
+                     + ("the base" if i == 0 else "base + " + ", ".join(d.selected_[:i])))
+        lines.append(f"    {'effect':<22} {'dBIC':>10} {'held-out':>9} {'fit I %':>8}  verdict")
+        for r in rnd:
+            fi = r.fit_percent.get("current_A", math.nan)
+            lines.append(f"    {r.effect:<22} {r.delta_bic:>10.1f} {r.holdout_gain:>8.1f}% {fi:>8.1f}  "
+                         f"{'SUPPORTED' if r.supported else r.reason}")
+    lines.append(f"  selected: {', '.join(d.selected_) or 'nothing'}")
+    lines.append(f"  final: {format_fit(d.final_)}")
+    lines.append("  " + diagnosis_headline(d))
+    if d.unexplained_:
+        lines.append("  unexplained residual: " + d.unexplained_["text"])
+    for c in d.caveats_:
+        lines.append("  caution: " + c)
+    return "\n".join(lines)
+
+
+def plot_diagnosis(d, fig=None):
+    """Measured vs base vs final model, residuals, correlation and spectrum (failing intervals shaded).
+
+    Parameters
+    ----------
+    d : Diagnosis
+        A fitted diagnosis.
+    fig : matplotlib.figure.Figure, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    return d.comparison_base_.plot(fig=fig, compare_with=d.comparison_final_,
+                                   labels=("calibrated base", "final: base + " + (", ".join(d.selected_) or
+                                                                                  "nothing")))
+
+
+def plot_ranking(d, fig=None):
+    """Bar charts: delta BIC and held-out gain of each first-round candidate, and fit before/after.
+
+    Parameters
+    ----------
+    d : Diagnosis
+        A fitted diagnosis.
+    fig : matplotlib.figure.Figure, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    from matplotlib.figure import Figure
+
+    fig = fig or Figure(figsize=(13, 3.6))
+    a0, a1, a2 = fig.subplots(1, 3, gridspec_kw={"width_ratios": [3, 3, 2]})
+    rk = d.ranking_
+    names = [r.effect for r in rk]
+    colors = ["C2" if r.supported else "C7" for r in rk]
+    y = np.arange(len(rk))
+    dbic = [max(-1e6, r.delta_bic) if math.isfinite(r.delta_bic) else 0 for r in rk]
+    a0.barh(y, [-v for v in dbic], color=colors)
+    a0.set_xscale("symlog", linthresh=10)
+    a0.axvline(d.min_delta_bic, color="k", ls=":")
+    a0.set_yticks(y, names, fontsize=8)
+    a0.invert_yaxis()
+    a0.set_title("-dBIC (fitting part), threshold dotted", fontsize=9)
+    a1.barh(y, [max(-100.0, r.holdout_gain) if math.isfinite(r.holdout_gain) else 0 for r in rk], color=colors)
+    a1.set_xlim(-105, 105)
+    a1.axvline(d.min_holdout_gain, color="k", ls=":")
+    a1.set_yticks(y, [""] * len(y))
+    a1.invert_yaxis()
+    a1.set_title("held-out gain [%] (cut at -100), threshold dotted", fontsize=9)
+    chans = list(d.baseline_)
+    x = np.arange(len(chans))
+    a2.bar(x - 0.2, [d.baseline_[c] for c in chans], 0.4, label="calibrated base", color="C0")
+    a2.bar(x + 0.2, [d.final_[c] for c in chans], 0.4, label="final", color="C3")
+    for i, c in enumerate(chans):
+        a2.text(i - 0.2, d.baseline_[c], f"{d.baseline_[c]:.1f}", ha="center", va="bottom", fontsize=8)
+        a2.text(i + 0.2, d.final_[c], f"{d.final_[c]:.1f}", ha="center", va="bottom", fontsize=8)
+    a2.set_xticks(x, chans)
+    lo = min(min(d.baseline_.values()), min(d.final_.values()))
+    a2.set_ylim(max(0.0, lo - 10), 102)
+    a2.set_title("fit % before and after", fontsize=9)
+    a2.legend(fontsize=8, loc="lower right")
+    fig.suptitle(diagnosis_headline(d), fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+def diagnosis_html(d, figs=None) -> str:
+    """Return the report of a fitted diagnosis as one self-contained HTML page.
+
+    Parameters
+    ----------
+    d : Diagnosis
+        A fitted diagnosis.
+    figs : dict, optional
+        Figures already drawn (name -> Figure): the signals, then the ranking.
+
+    Returns
+    -------
+    str
+    """
+    figs = figs or {"s": plot_diagnosis(d), "r": plot_ranking(d)}
+    f_sig, f_rank = list(figs.values())
+    parts = [f'<p class="big">{esc(diagnosis_headline(d))}</p>']
+    if d.unexplained_:
+        parts.append(f'<p class="big warn">Unexplained: {esc(d.unexplained_["text"])}</p>')
+    for c in d.caveats_:
+        parts.append(f'<p class="warn">Caution: {esc(c)}</p>')
+    parts.append("<h2>Measured, calibrated base and final model</h2>")
+    parts.append("<p>Shaded: intervals where the base model's |residual| exceeds 3 sigma. "
+                 "Dashed lines: phases of the start-up.</p>")
+    parts.append(figure_tag(f_sig, "signals and residuals"))
+    rows = [(f["channel"], f["text"]) for f in d.comparison_base_.failing]
+    parts.append("<h3>Where the base model fails</h3>" + (table(["channel", "interval"], rows, left=2)
+                                                            if rows else "<p>nowhere beyond 3 sigma</p>"))
+    rows = [(f["channel"], f["text"]) for f in d.comparison_final_.failing]
+    parts.append("<h3>Where the final model fails</h3>" + (table(["channel", "interval"], rows, left=2)
+                                                             if rows else "<p>nowhere beyond 3 sigma</p>"))
+    parts.append("<h2>Candidates</h2>")
+    parts.append(figure_tag(f_rank, "ranking"))
+    for i, rnd in enumerate(d.rounds_):
+        parts.append(f"<h3>Round {i + 1}: against " + esc("the calibrated base" if i == 0 else
+                                                          "base + " + ", ".join(d.selected_[:i])) + "</h3>")
+        rows, sel = [], set()
+        for j, r in enumerate(rnd):
+            if r.supported and j == 0:
+                sel.add(j)
+            pars = "; ".join(f"{k} = {_fmt_val(v['value'], v['stderr'])} {v['unit']}".rstrip()
+                             for k, v in r.parameters.items() if k in _effect_params(r.effect))
+            rows.append((r.effect, f"{r.delta_bic:.1f}", f"{r.holdout_gain:+.1f}",
+                         f"{r.fit_percent.get('current_A', math.nan):.1f}",
+                         f"{r.fit_percent.get('speed_rpm', math.nan):.2f}", pars or "-",
+                         ", ".join(r.on_bound) or "-", "supported" if r.supported else r.reason))
+        parts.append(table(["effect", "dBIC", "held-out gain %", "fit I %", "fit n %", "effect parameters",
+                            "on bound", "verdict"], rows, left=1, selected=sel))
+    parts.append("<h2>Final model</h2><pre>" + esc(d.final_calibration_.summary()) + "</pre>")
+    parts.append("<h2>Residual signature of the final model</h2><pre>"
+                 + esc(d.signature_["text"]) + "</pre>")
+    for note in d.experiment_.notes:
+        parts.append(f"<p>Note: {esc(note)}</p>")
+    parts.append("<h2>Settings</h2><pre>" + esc(str(diagnosis_dict(d)["settings"])) + "</pre>")
+    return page(f"kilnctl diagnose: {d.measurement_.source}", "\n".join(parts))
+
+
+def write_diagnosis_report(d, folder, protect=()) -> list:
+    """Write ``diagnose.html`` (self-contained), ``diagnose.json`` and the figures into a folder.
+
+    Parameters
+    ----------
+    d : Diagnosis
+        A fitted diagnosis.
+    folder : path-like
+        Destination folder (created).
+    protect : sequence of path-like
+        Input files never to overwrite.
+
+    Returns
+    -------
+    list of Path
+        Files written (each whole or not at all).
+    """
+    figs = {"diagnose_signals.png": plot_diagnosis(d), "diagnose_ranking.png": plot_ranking(d)}
+    pngs = {}
+    for name, fig in figs.items():
+        buf = io.BytesIO()
+        fig.savefig(buf, format="png", dpi=100)
+        pngs[name] = buf.getvalue()
+    return write_report_files(folder, {"diagnose.html": diagnosis_html(d, figs), "diagnose.json": diagnosis_dict(d),
+                                       **pngs}, protect=protect)
+
+
+# --- comparison ------------------------------------------------------------------------------------
+def write_comparison_report(c, folder, protect=()) -> list:
+    """Write ``compare.html`` (self-contained), ``compare.json`` and ``compare.png`` into a folder.
+
+    Parameters
+    ----------
+    c : Comparison
+        A :class:`~kilnctl.measure.compare.Comparison` of a model with a record.
+    folder : path-like
+        Destination folder (created).
+    protect : sequence of path-like
+        Input files never to overwrite.
+
+    Returns
+    -------
+    list of Path
+        Files written (each whole or not at all).
+    """
+    fig = c.plot()
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=110)
+    body = ("<pre>" + esc("\n".join(c.summary_lines())) + "</pre>\n" + figure_tag(fig, "measured vs model"))
+    return write_report_files(folder, {"compare.html": page(f"kilnctl compare: {c.source}", body),
+                                       "compare.json": c.to_dict(), "compare.png": buf.getvalue()}, protect=protect)
