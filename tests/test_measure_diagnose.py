@@ -154,3 +154,77 @@ def test_unbalance_in_a_record_shorter_than_a_revolution_comes_with_a_caution():
     assert any("slow drift" in c and "129 s" in c for c in d.caveats_)
     assert d.to_dict()["caveats"] == d.caveats_
     assert "caution: kiln_unbalance" in d.summary()
+
+
+# --- cautions: the exact text a user reads, for effects with and without a period ----------------------------
+def _selected(name, dbic_corr):
+    """A Diagnosis whose first round selected ``name`` with the given corrected dBIC (no fit run)."""
+    from kilnctl.measure.diagnose import CandidateResult
+
+    d = Diagnosis(SETUP)
+    d.selected_ = [name]
+    d.rounds_ = [[CandidateResult(name, -500.0, 20.0, {}, {}, {}, [], [], True, "", 0.0,
+                                  delta_bic_corrected=dbic_corr)]]
+    return d
+
+
+def _exp(omega_ref=500.0):
+    from kilnctl.measure.io import Experiment
+
+    return Experiment(t0=0.0, ramp_rate=74.0, omega_ref=omega_ref, source="test")
+
+
+def test_caution_of_an_effect_without_a_period():
+    # truth: second_motor has no period (Effect.period is None): a strong one gets no caution at all, a weak one
+    # only the autocorrelation caution -- never a "0.00 of its period (inf s)" text (issue 12, item 4)
+    m, _ = make_record((), seed=0, t_end=4.0)
+    exp = _exp()
+    assert _selected("second_motor", -300.0)._caveats(m, exp, SETUP) == []
+    weak = _selected("second_motor", -4.0)._caveats(m, exp, SETUP)
+    assert weak == ["second_motor: the evidence is weak once the residual's autocorrelation is allowed for "
+                    "(corrected dBIC -4.0 against the threshold -10); small effects (a few-millisecond sensor lag, "
+                    "a stiff drive train) are often like this, but so is an effect that fits slow noise."]
+    for name in ("second_motor", "viscous_drag", "backlash", "current_limit", "speed_sensor_lag",
+                 "drivetrain_compliance", "torque_friction_law"):
+        for text in _selected(name, -4.0)._caveats(m, exp, SETUP):
+            assert "period" not in text and "inf" not in text and " ." not in text
+
+
+def test_caution_of_an_effect_with_a_period():
+    # truth: one kiln revolution at the set speed is 60 n / omega_ref = 60 * 1076.5 / 500 = 129 s (Table 1's
+    # reduction); a record of 40 s is 40 / 129.2 = 0.31 of it
+    from kilnctl.measure.diagnose import caution_texts
+    from kilnctl.measure.effects import CATALOGUE
+
+    note = CATALOGUE["kiln_unbalance"].short_record_note
+    period = 60.0 * SETUP.n / 500.0
+    assert period == pytest.approx(129.2, abs=0.1)
+    m, _ = make_record((), seed=0, t_end=40.02)
+    exp = _exp()
+    strong = _selected("kiln_unbalance", -300.0)._caveats(m, exp, SETUP)
+    assert strong == ["kiln_unbalance was selected on a record of 40 s, 0.31 of its period (129 s): there it is "
+                      + note + ". A record longer than one period tells them apart."]
+    weak = _selected("kiln_unbalance", -4.0)._caveats(m, exp, SETUP)
+    assert weak == ["kiln_unbalance was selected on a record of 40 s, 0.31 of its period (129 s): there it is "
+                    + note + "; its evidence is weak once the residual's autocorrelation is allowed for "
+                    "(corrected dBIC -4.0). A record longer than one period tells them apart."]
+    # a record longer than the period: only the weak-evidence caution remains
+    assert caution_texts("kiln_unbalance", 200.0, period, note, -300.0, 10.0) == []
+    assert caution_texts("kiln_unbalance", 200.0, period, note, -4.0, 10.0)[0].startswith(
+        "kiln_unbalance: the evidence is weak")
+    # a periodic effect without a note still reads as a sentence
+    assert caution_texts("x", 10.0, 20.0, "", -300.0, 10.0) == [
+        "x was selected on a record of 10 s, 0.50 of its period (20 s): only part of a cycle is seen, which other "
+        "causes can also produce. A record longer than one period tells them apart."]
+    # no period, or a non-finite one, never gives a period caution
+    assert caution_texts("x", 10.0, None, "", -300.0, 10.0) == []
+    assert caution_texts("x", 10.0, float("inf"), "", -300.0, 10.0) == []
+
+
+def test_every_periodic_catalogue_effect_says_what_else_makes_its_signature():
+    # truth: the catalogue's own declarations; a period without a note would leave the caution without its reason
+    from kilnctl.measure.effects import CATALOGUE
+
+    for eff in CATALOGUE.values():
+        if eff.period is not None:
+            assert eff.short_record_note and not eff.short_record_note.endswith(".")

@@ -41,7 +41,7 @@ from .stats import failing_intervals, fit_percent, residual_spectrum, robust_sig
 from . import report as _report
 from .report import format_fit as _fmt_fit, json_number as _num, unit_of as _unit
 
-__all__ = ["Diagnosis", "CandidateResult", "residual_signature", "DEFAULT_CALIBRATE"]
+__all__ = ["Diagnosis", "CandidateResult", "residual_signature", "caution_texts", "DEFAULT_CALIBRATE"]
 
 #: a residual spectral peak this many times its neighbours is an oscillation the model misses
 NARROWBAND_RATIO = 10.0
@@ -342,20 +342,10 @@ class Diagnosis:
             r = next((c for c in self.rounds_[i] if c.effect == name), None)
             if r is None:
                 continue
-            weak = not (r.delta_bic_corrected < -self.min_delta_bic)
             eff = CATALOGUE[name]
-            period = eff.period(params, exp.omega_ref) if eff.period is not None else math.inf
-            if span < period:
-                out.append(f"{name} was selected on a record of {span:.0f} s, {span / period:.2f} of its period "
-                           f"({period:.0f} s): there it is {eff.short_record_note}"
-                           + (f"; its evidence is weak once the residual's autocorrelation is allowed for "
-                              f"(corrected dBIC {r.delta_bic_corrected:+.1f})" if weak else "")
-                           + ". A record longer than one period tells them apart.")
-            elif weak:
-                out.append(f"{name}: the evidence is weak once the residual's autocorrelation is allowed for "
-                           f"(corrected dBIC {r.delta_bic_corrected:+.1f} against the threshold "
-                           f"{-self.min_delta_bic:g}); small effects (a few-millisecond sensor lag, a stiff drive "
-                           "train) are often like this, but so is an effect that fits slow noise.")
+            period = eff.period(params, exp.omega_ref) if eff.period is not None else None
+            out += caution_texts(name, span, period, eff.short_record_note, r.delta_bic_corrected,
+                                 self.min_delta_bic)
         return out
 
     def _try(self, m, params, selected, name, current, scales, train, test, exp) -> CandidateResult:
@@ -581,6 +571,55 @@ class Diagnosis:
         """
         self._check_fitted()
         return _report.diagnosis_html(self, figs)
+
+
+def caution_texts(effect: str, span_s: float, period_s: float | None, short_record_note: str,
+                  delta_bic_corrected: float, min_delta_bic: float) -> list[str]:
+    """The cautions a user reads about one selected effect (empty when there is nothing to say).
+
+    Two things weaken the evidence for a selected effect: a record shorter
+    than the period of its signature (then only part of a cycle is seen, which
+    other causes also make) and a BIC gain that misses the threshold once the
+    residual's autocorrelation is allowed for.
+
+    Parameters
+    ----------
+    effect : str
+        Catalogue name of the effect.
+    span_s : float
+        Length of the record from the start of the experiment [s].
+    period_s : float or None
+        Period of the effect's signature [s]; None for an effect without one
+        (then no short-record caution).
+    short_record_note : str
+        What else makes the signature in a record shorter than a period.
+    delta_bic_corrected : float
+        delta BIC corrected for residual autocorrelation [-].
+    min_delta_bic : float
+        The BIC threshold of the diagnosis [-] (positive).
+
+    Returns
+    -------
+    list of str
+        At most one caution.
+    """
+    weak = not (delta_bic_corrected < -min_delta_bic)
+    short = period_s is not None and math.isfinite(period_s) and period_s > 0 and span_s < period_s
+    if short:
+        text = (f"{effect} was selected on a record of {span_s:.0f} s, {span_s / period_s:.2f} of its period "
+                f"({period_s:.0f} s)")
+        text += (f": there it is {short_record_note}" if short_record_note else
+                 ": only part of a cycle is seen, which other causes can also produce")
+        if weak:
+            text += (f"; its evidence is weak once the residual's autocorrelation is allowed for "
+                     f"(corrected dBIC {delta_bic_corrected:+.1f})")
+        return [text + ". A record longer than one period tells them apart."]
+    if weak:
+        return [f"{effect}: the evidence is weak once the residual's autocorrelation is allowed for "
+                f"(corrected dBIC {delta_bic_corrected:+.1f} against the threshold {-min_delta_bic:g}); small "
+                "effects (a few-millisecond sensor lag, a stiff drive train) are often like this, but so is an "
+                "effect that fits slow noise."]
+    return []
 
 
 def variance_inflation(e, max_lag: int | None = None) -> float:
