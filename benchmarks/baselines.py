@@ -35,7 +35,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.integrate import solve_ivp
 
-__all__ = ["BaselineRun", "ScipyHybrid", "ControlSmooth", "summarize", "summary_errors", "MODELS"]
+__all__ = ["BaselineRun", "ScipyHybrid", "ControlSmooth", "EffectPlant", "PLANT_EFFECTS", "summarize", "summary_errors",
+           "MODELS"]
 
 #: state names and scales (the integrator's nominal magnitudes), as kilnctl declares them
 MODELS = {
@@ -712,3 +713,239 @@ class ControlSmooth:
         y = np.atleast_2d(r.outputs)
         return BaselineRun(np.asarray(r.time), dict(zip(self.OUTPUTS, y)), [], wall,
                            {"method": method, "rtol": rtol, "atol": atol, "eps": dict(self.eps)})
+
+
+# ----------------------------------------------------------------------------------------------
+# (c) the plant with physical effects in forms of its own, for the diagnosis benchmark
+# ----------------------------------------------------------------------------------------------
+#: effect settings of :class:`EffectPlant` and their neutral values (the plant without the effect)
+PLANT_EFFECTS = {
+    "current_bw": 2000.0,  # bandwidth of the inner current loop [rad/s] (it limits the current to I_max)
+    "J_m2": 0.0,           # second motor rotor on the motor shaft [kg m^2]
+    "k_tw": 0.0,           # torsional stiffness of the drive train at the kiln axis [N m/rad]; 0: rigid
+    "beta_tw": 0.0,        # stiffness-proportional damping of the drive train [s]: c = beta_tw * k
+    "gap": 0.0,            # backlash at the kiln axis [rad] (girth-gear play / R_o); 0: none
+    "k_gap": 0.0,          # contact stiffness behind the backlash [N m/rad] (0: the mesh's k_e R_o^2)
+    "c_gap": 0.0,          # contact damping behind the backlash [N m s/rad] (0: the mesh's C_e R_o^2)
+    "tau_sensor": 0.0,     # first-order lag of the speed sensor [s] (controller AND logged speed)
+    "B_kiln": 0.0,         # viscous drag on the kiln shell [N m s/rad]
+    "B_motor": 0.0,        # viscous drag (windage, seals) on the motor shaft [N m s/rad]
+    "m_ecc": 0.0,          # eccentric mass on the kiln (coating ring) [kg]
+    "r_ecc": 0.0,          # its distance from the kiln axis [m]
+    "phi_ecc": 0.0,        # its angle from the bottom dead centre at t = 0 [rad]
+    "T_load": 0.0,         # a resisting torque switched onto the kiln at t_load [N m] (outside the catalogue)
+    "t_load": math.inf,    # when [s]
+}
+EFFECT_STATES = ("z", "i_a", "omega_motor", "twist", "omega_kiln", "omega_burden", "psi", "omega_sensor",
+                 "theta_kiln")
+EFFECT_SCALES = (1e2, 1e3, 50.0, 1e-3, 0.05, 0.05, 1.0, 50.0, 1.0)
+
+
+class EffectPlant(ScipyHybrid):
+    """The macro plant with effects written in forms of its own, for records the diagnosis has not seen.
+
+    Written from the physics, not from :mod:`kilnctl.model`: the armature
+    current is a physical state driven by the armature voltage, and the
+    current limit is an inner current loop of finite bandwidth (not an ideal
+    clamp); the speed sensor's lag is in the logged speed as well as in the
+    controller's; the drive train is a two-mass system (motor side and kiln
+    side) with stiffness-proportional damping; backlash is a dead zone in that
+    link; viscous drag acts on the motor shaft and on the kiln; the kiln
+    unbalance is the gravity torque of an eccentric mass; and a load torque
+    can be switched on at a set time (an effect outside kilnctl's catalogue).
+    The burden's stick-slip is :class:`ScipyHybrid`'s state machine.
+
+    Parameters
+    ----------
+    params : kilnctl.Parameters or mapping
+        Base values (gains resolved, ``friction_law`` as wanted).
+    **effects : float
+        Settings of :data:`PLANT_EFFECTS` [units given there]; unknown names
+        raise ``ValueError``.
+
+    Notes
+    -----
+    Modes are (ramp, voltage_limit, current_loop, link, burden, load):
+    current_loop 'free' / 'upper' / 'lower' (while limiting, the loop holds
+    dI/dt = current_bw (I_max - i) and the speed integrator is frozen); link
+    'rigid', 'spring' (compliance, no play), 'gap', 'contact', 'back'.
+    """
+
+    def __init__(self, params, **effects):
+        unknown = sorted(set(effects) - set(PLANT_EFFECTS))
+        if unknown:
+            raise ValueError(f"unknown plant effect(s) {unknown}; known: {sorted(PLANT_EFFECTS)}")
+        super().__init__(params, "macro")
+        self.fx = dict(PLANT_EFFECTS)
+        self.fx.update({k: float(v) for k, v in effects.items()})
+        f, p = self.fx, self.p
+        if f["gap"] > 0:
+            k_m = f["k_gap"] or p["k_e"] * p["R_o"] ** 2
+            c_m = f["c_gap"] or p["C_e"] * p["R_o"] ** 2
+            # a compliant drive train in series with the stiff mesh behind the play
+            self.k_link = k_m if f["k_tw"] <= 0 else 1.0 / (1.0 / k_m + 1.0 / f["k_tw"])
+            self.c_link = c_m if f["k_tw"] <= 0 else f["beta_tw"] * self.k_link
+        else:
+            self.k_link, self.c_link = f["k_tw"], f["beta_tw"] * f["k_tw"]
+        self.model = "effects"
+        self.state_names, self.scales = EFFECT_STATES, np.array(EFFECT_SCALES)
+        self.nx = len(EFFECT_STATES)
+        self.components = ("ramp", "voltage_limit", "current_loop", "link", "burden", "load")
+
+    @property
+    def J_motor_side(self) -> float:
+        """Inertia of the motor side (motor and second motor) [kg m^2]."""
+        return self.p["J_m"] + self.fx["J_m2"]
+
+    @property
+    def J_kiln_side(self) -> float:
+        """Inertia of the kiln shell with the eccentric mass [kg m^2]."""
+        return self.p["J_kiln"] + self.fx["m_ecc"] * self.fx["r_ecc"] ** 2
+
+    def initial(self):
+        """Physical initial state and initial mode tuple (at rest, the play open in front)."""
+        x = np.zeros(self.nx)
+        x[EFFECT_STATES.index("psi")] = self.p["psi_0"]
+        link = "rigid" if self.k_link <= 0 else ("spring" if self.fx["gap"] <= 0 else "back")
+        return x, ("rising", "free", "free", link, "stick", "off" if self.fx["t_load"] > 0 else "on")
+
+    def _eval(self, t, x, mode, full=False, lib=M):
+        p, f = self.p, self.fx
+        z, i_a, om, tw, om_k, om_b, psi, om_s, th_k = x
+        ramp, volt, cur, link, burden, load = mode
+        if ramp == "rising":
+            e_v, ev_dot = p["ramp_rate"] * t, p["ramp_rate"]
+        else:
+            e_v, ev_dot = p["omega_ref"], 0.0
+        lag = f["tau_sensor"] > 0
+        e_f = e_v - p["K_fb"] * (om_s if lag else om)
+        e_pi = p["k_p"] * e_f + p["k_I"] * z
+        integ = 1.0
+        if volt == "free":
+            e_a = e_pi
+        else:
+            e_a, integ = (p["V_max"] if volt == "upper" else -p["V_max"]), 0.0
+        # loads: bearing (eq. 17), drags, eccentric mass, the switched load, burden friction
+        T_m = p["k_i"] * i_a - (p["B_m"] + f["B_motor"]) * om
+        T_k = (-p["T_brg"] * lib.tanh(om_k / BEARING_OMEGA_EPS) - f["B_kiln"] * om_k
+               - f["m_ecc"] * p["g"] * f["r_ecc"] * lib.sin(th_k + f["phi_ecc"]))
+        if load == "on":
+            T_k = T_k - f["T_load"]
+        s_psi, c_psi = lib.sin(psi), lib.cos(psi)
+        T_b = -p["m_v"] * p["g"] * p["L"] * s_psi
+        N = p["m_v"] * p["g"] * lib.fmax(c_psi, 0.0)
+        stuck = burden in ("stick", "held")
+        if not stuck:
+            T_kin = (1.0 if burden == "slip_pos" else -1.0) * p["mu_c"] * N * p["R"]
+            T_b = T_b + T_kin
+            T_k = T_k - T_kin
+        n, J_ms, J_k, J_v = p["n"], self.J_motor_side, self.J_kiln_side, p["J_v"]
+        if link == "rigid":
+            rate_tw = 0.0 * tw
+            if stuck:
+                acc_m = (T_m + (T_k + T_b) / n) / (J_ms + (J_k + J_v) / n ** 2)
+                acc_k = acc_b = acc_m / n
+            else:
+                acc_m = (T_m + T_k / n) / (J_ms + J_k / n ** 2)
+                acc_k, acc_b = acc_m / n, T_b / J_v
+            T_link = n * (T_m - J_ms * acc_m)
+        else:
+            rate_tw = om / n - om_k
+            k, c, gap = self.k_link, self.c_link, f["gap"]
+            if link == "spring":
+                T_link = k * tw + c * rate_tw
+            elif link == "contact":
+                T_link = lib.fmax(k * (tw - gap) + c * rate_tw, 0.0)
+            elif link == "back":
+                T_link = lib.fmin(k * tw + c * rate_tw, 0.0)
+            else:
+                T_link = 0.0 * tw
+            acc_m = (T_m - T_link / n) / J_ms
+            T_k = T_k + T_link
+            if stuck:
+                acc_k = acc_b = (T_k + T_b) / (J_k + J_v)
+            else:
+                acc_k, acc_b = T_k / J_k, T_b / J_v
+        acc_s = (om - om_s) / f["tau_sensor"] if lag else acc_m
+        ef_dot = ev_dot - p["K_fb"] * acc_s
+        v_pid = e_a + p["k_D"] * ef_dot   # the armature voltage the speed controller asks for
+        bw, I = f["current_bw"], p["I_max"]
+        v_hi = p["R_a"] * i_a + p["k_b"] * om + p["L_a"] * bw * (I - i_a)    # what the current loop allows
+        v_lo = p["R_a"] * i_a + p["k_b"] * om + p["L_a"] * bw * (-I - i_a)
+        if cur == "free":
+            v = v_pid
+        else:
+            v, integ = (v_hi if cur == "upper" else v_lo), 0.0
+        di = (v - p["R_a"] * i_a - p["k_b"] * om) / p["L_a"]
+        dx = [integ * e_f, di, acc_m, rate_tw, acc_k, acc_b, om_b, acc_s, om_k]
+        if not full:
+            return dx, None
+        g, tg, kinds, comps = [], [], [], []
+
+        def guard(val, target, kind, comp):
+            g.append(val), tg.append(target), kinds.append(kind), comps.append(comp)
+
+        if ramp == "rising":
+            t_r = p["omega_ref"] / p["ramp_rate"]
+            guard((t_r - t) / t_r, "hold", "ramp_end", "ramp")
+        V = p["V_max"]
+        if volt == "free":
+            guard((V - e_pi) / V, "upper", "voltage_limit", "voltage_limit")
+            guard((V + e_pi) / V, "lower", "voltage_limit", "voltage_limit")
+        elif volt == "upper":
+            guard((e_pi - V) / V, "free", "voltage_limit_release", "voltage_limit")
+        else:
+            guard((-V - e_pi) / V, "free", "voltage_limit_release", "voltage_limit")
+        if cur == "free":
+            guard((v_hi - v_pid) / V, "upper", "current_limit", "current_loop")
+            guard((v_pid - v_lo) / V, "lower", "current_limit", "current_loop")
+        elif cur == "upper":
+            guard((v_pid - v_hi) / V, "free", "current_limit_release", "current_loop")
+        else:
+            guard((v_lo - v_pid) / V, "free", "current_limit_release", "current_loop")
+        gap = f["gap"]
+        if link == "contact":
+            guard((tw - gap) / DS_SCALE * p["R_o"], "gap", "separation", "link")
+        elif link == "gap":
+            guard((gap - tw) / DS_SCALE * p["R_o"], "contact", "contact", "link")
+            guard(tw / DS_SCALE * p["R_o"], "back", "back_contact", "link")
+        elif link == "back":
+            guard(-tw / DS_SCALE * p["R_o"], "gap", "back_separation", "link")
+        if load == "off" and math.isfinite(f["t_load"]):
+            guard((f["t_load"] - t) / max(f["t_load"], 1.0), "on", "load_step", "load")
+        v_rel = om_k - om_b
+        scale = p["m_v"] * p["g"] * p["R"]
+        if stuck:
+            T_need = J_v * acc_b - T_b
+            if burden == "held" or p["friction_law"] == "torque":
+                cap = (p["mu_c"] if burden == "held" else p["mu_s"]) * N * p["R"]
+                guard((cap - T_need) / scale, "slip_pos", "breakaway", "burden")
+                guard((cap + T_need) / scale, "slip_neg", "breakaway", "burden")
+            else:
+                guard(p["mu_s"] * c_psi - s_psi, "slip_pos", "breakaway", "burden")
+                guard(p["mu_s"] * c_psi + s_psi, "slip_neg", "breakaway", "burden")
+        else:
+            guard((v_rel if burden == "slip_pos" else -v_rel) / V_REL_SCALE, "stick", "restick", "burden")
+        out = {"i_a": i_a, "speed_rpm": (om_s if lag else om) * RPM_PER_RAD_S,
+               "speed_motor_rpm": om * RPM_PER_RAD_S, "speed_ref_rpm": e_v + 0.0 * om,
+               "T_link": T_link, "twist": tw, "omega_kiln": om_k, "psi": psi, "v_rel": v_rel, "theta_kiln": th_k}
+        return dx, {"g": g, "targets": tg, "kinds": kinds, "comps": comps, "out": out}
+
+    def project(self, x, mode):
+        """Speeds made consistent with the rigid links of ``mode``, conserving momentum."""
+        p = self.p
+        x = np.array(x, float)
+        i_m, i_k, i_b = 2, 4, 5
+        stuck = mode[4] in ("stick", "held")
+        J_k, J_v, n = self.J_kiln_side, p["J_v"], p["n"]
+        if mode[3] == "rigid":
+            Jb = J_v / n ** 2 if stuck else 0.0
+            H = self.J_motor_side * x[i_m] + J_k / n * x[i_k] + Jb * n * x[i_b]
+            w = H / (self.J_motor_side + J_k / n ** 2 + Jb)
+            x[i_m], x[i_k] = w, w / n
+            if stuck:
+                x[i_b] = w / n
+        elif stuck:
+            w = (J_k * x[i_k] + J_v * x[i_b]) / (J_k + J_v)
+            x[i_k] = x[i_b] = w
+        return x
