@@ -12,8 +12,10 @@ The cache folder is ``$KILNCTL_CACHE`` or ``~/.cache/kilnctl``.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import os
+import platform
 import shutil
 import subprocess
 import tempfile
@@ -22,7 +24,7 @@ from pathlib import Path
 
 import casadi as ca
 
-__all__ = ["compile_function", "cache_dir", "compiler_available"]
+__all__ = ["compile_function", "cache_dir", "compiler_available", "toolchain_id"]
 
 _CC = shutil.which(os.environ.get("CC", "gcc")) or shutil.which("cc")
 
@@ -35,6 +37,21 @@ def cache_dir() -> Path:
 def compiler_available() -> bool:
     """True when a C compiler was found (``$CC``, ``gcc`` or ``cc``) and ``KILNCTL_NO_COMPILE`` is unset."""
     return _CC is not None and not os.environ.get("KILNCTL_NO_COMPILE")
+
+
+@functools.lru_cache(maxsize=1)
+def toolchain_id() -> str:
+    """Compiler identity and target (first line of ``$CC --version``, machine, OS), part of the cache key.
+
+    A library built by another compiler or for another architecture (a cache
+    folder shared between machines) is then never picked up by mistake.
+    """
+    try:
+        ver = subprocess.run([_CC, "--version"], capture_output=True, timeout=30).stdout.decode(errors="replace")
+        first = ver.splitlines()[0] if ver else "unknown"
+    except (OSError, subprocess.SubprocessError, TypeError):
+        first = "unknown"
+    return f"{_CC}|{first}|{platform.machine()}|{platform.system()}"
 
 
 def compile_sources(stem: str, sources: dict[str, bytes]) -> Path | None:
@@ -54,7 +71,7 @@ def compile_sources(stem: str, sources: dict[str, bytes]) -> Path | None:
     """
     if not compiler_available():
         return None
-    h = hashlib.sha256(b"|O2|")
+    h = hashlib.sha256(b"|O2|" + toolchain_id().encode() + b"|")
     for name in sorted(sources):
         h.update(name.encode() + b"\0" + sources[name])
     folder = cache_dir()

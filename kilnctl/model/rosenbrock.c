@@ -37,10 +37,9 @@ int kp_work(cint* sz_arg, cint* sz_res, cint* sz_iw, cint* sz_w);
 
 #define NMAX 64
 #define GMAX 64
-/* a guard has crossed when it is below -GUARD_EPS (guards are scaled to order one): a guard that
-   starts on its boundary does not fire on round-off or on
-   integration error below the default absolute tolerance (1e-8 of each state's scale) */
-#define GUARD_EPS 1e-7
+/* A guard has crossed when it is below -guard_eps (an argument of kiln_run, defined once in Python:
+   kilnctl.model.stepper.GUARD_EPS; guards are scaled to order one), so a guard that starts on its
+   boundary does not fire on round-off or on integration error below the absolute tolerance. */
 
 static const double GAM = 7.886751345948129e-01;
 static const double A21 = 1.267949192431123, A31 = 1.267949192431123, A32 = 0.0;
@@ -125,16 +124,21 @@ static int ros_step(ctx_t* c, int n, double t, const double* x, const double* f0
  * Integrate one mode from (t0, x0) until t_end or the first guard crossing.
  * Samples at k*dt_out > t0 (the global grid) are written to out_t/out_x (row per sample).
  * Returns 0 at t_end, 1 at an event (t_ev, x_ev, j_ev), 2 when the output buffer is full
- * (t_ev, x_ev hold the restart point), -1 singular matrix, -2 function error,
- * -3 step size underflow, -4 too many steps, -5 too many states, -6 a state beyond +-runaway
- * (j_ev names it).
+ * (t_ev, x_ev hold the last accepted integrator point, where the caller restarts), -1 singular
+ * matrix, -2 function error, -3 step size underflow, -4 too many steps, -5 too many states,
+ * -6 a state beyond +-runaway (j_ev names it), -7 bad arguments, -8 out of memory.
  */
 int kiln_run(int n, int ng, const double* P, double t0, double t_end, const double* x0, double dt_out,
              double rtol, double atol, double hmax, double h0, double event_tol, int max_out, double* out_t,
              double* out_x, int* n_out, double* t_ev, double* x_ev, int* j_ev, int max_steps, int* n_steps,
-             double* h_last, double runaway) {
-    if (n > NMAX || ng > GMAX) return -5;
+             double* h_last, double runaway, double guard_eps) {
+    n_out[0] = 0; n_steps[0] = 0; h_last[0] = 0.0;
+    if (n > NMAX || ng > GMAX || n < 1 || ng < 0) return -5;
+    if (max_out < 2 || !(dt_out > 0) || !(hmax > 0)) return -7;
+    /* a step never spans more output samples than half the buffer, so a restart always makes progress */
+    if (hmax > 0.5 * max_out * dt_out) hmax = 0.5 * max_out * dt_out;
     ctx_t* c = (ctx_t*)malloc(sizeof(ctx_t));
+    if (c == NULL) return -8;
     c->P = P;
     double x[NMAX], f0[NMAX], x1[NMAX], f1[NMAX], errv[NMAX], ft[NMAX], tmp[NMAX];
     double J[NMAX * NMAX], W[NMAX * NMAX];
@@ -193,42 +197,49 @@ int kiln_run(int n, int ng, const double* P, double t0, double t_end, const doub
         }
         steps++;
         if (call3(kg, c, x1, t1, g1)) { status = -2; break; }
-        /* guards on the step's interpolant at every grid point k*dt_out inside (t, t1), so that an
-           excursion longer than dt_out is seen whatever the step size; then at t1 */
-        double t_hi = t1;
-        double* g_hi = g1;
+        /* Guards are checked at every grid point k*dt_out inside (t, t1), on the step's interpolant, so
+           that an excursion longer than dt_out is seen whatever the step size, and at t1.  At the first
+           check point where a guard is below -guard_eps, its crossing is located by Illinois on real
+           steps from (t, x).  A crossing seen only on the interpolant must be confirmed by a real step;
+           a false alarm (interpolant and real step differ by the local error near a tangency, or when
+           the crossing lies within the error of a grid point) does NOT end the scan: the later check
+           points and t1 are still examined, so a real crossing later in the step is never skipped. */
+        int jbest = -1; double tbest = t1;
         if (ng > 0) {
             double kk = floor(t / dt_out * (1 + 1e-14)) + 1.0;
-            for (double tau = kk * dt_out; tau < t1 * (1 - 1e-14); kk += 1.0, tau = kk * dt_out) {
-                hermite(n, t, x, f0, t1, x1, f1, tau, tmp);
-                if (call3(kg, c, tmp, tau, gt)) { status = -2; goto done; }
-                int hit = 0;
-                for (int j = 0; j < ng; j++) if (gt[j] < -GUARD_EPS) hit = 1;
-                if (hit) { t_hi = tau; memcpy(gi, gt, ng * sizeof(double)); g_hi = gi; break; }
-            }
-        }
-        /* first guard to cross in (t, t_hi]: Illinois on real steps from (t, x) */
-        int jbest = -1; double tbest = t_hi;
-        for (int j = 0; j < ng; j++) {
-            if (g_hi[j] < -GUARD_EPS) {
-                double a = t, fa = g0[j] > 0 ? g0[j] : 1e-300, b = t_hi, fb = g_hi[j];
-                int side = 0, b_real = (t_hi == t1);  /* fb from a real step, or from the interpolant */
-                for (int it = 0; it < 100 && b - a > event_tol; it++) {
-                    double m = b - fb * (b - a) / (fb - fa);
-                    if (!(m > a && m < b)) m = 0.5 * (a + b);
-                    if (ros_step(c, n, t, x, f0, J, ft, m - t, tmp, errv, W, piv)) { status = -2; goto done; }
-                    if (call3(kg, c, tmp, m, gt)) { status = -2; goto done; }
-                    if (gt[j] > 0) { a = m; fa = gt[j]; if (side == -1) fb *= 0.5; side = -1; }
-                    else { b = m; fb = gt[j]; b_real = 1; if (side == 1) fa *= 0.5; side = 1; }
-                    if (fb == 0.0) break;
+            for (;;) {
+                double tau = kk * dt_out;
+                const double* gv;
+                int at_end = !(tau < t1 * (1 - 1e-14));
+                if (at_end) { tau = t1; gv = g1; }
+                else {
+                    hermite(n, t, x, f0, t1, x1, f1, tau, tmp);
+                    if (call3(kg, c, tmp, tau, gt)) { status = -2; goto done; }
+                    memcpy(gi, gt, ng * sizeof(double));
+                    gv = gi;
+                    kk += 1.0;
                 }
-                if (!b_real) {
-                    /* seen only on the interpolant (e.g. near a tangency): a real step must confirm it */
-                    if (ros_step(c, n, t, x, f0, J, ft, b - t, tmp, errv, W, piv)) { status = -2; goto done; }
-                    if (call3(kg, c, tmp, b, gt)) { status = -2; goto done; }
-                    if (!(gt[j] < -GUARD_EPS)) continue;  /* false alarm: no crossing of this guard */
+                for (int j = 0; j < ng; j++) {
+                    if (!(gv[j] < -guard_eps)) continue;
+                    double a = t, fa = g0[j] > 0 ? g0[j] : 1e-300, b = tau, fb = gv[j];
+                    int side = 0, b_real = at_end;  /* fb from a real step, or from the interpolant */
+                    for (int it = 0; it < 100 && b - a > event_tol; it++) {
+                        double m = b - fb * (b - a) / (fb - fa);
+                        if (!(m > a && m < b)) m = 0.5 * (a + b);
+                        if (ros_step(c, n, t, x, f0, J, ft, m - t, tmp, errv, W, piv)) { status = -2; goto done; }
+                        if (call3(kg, c, tmp, m, gt)) { status = -2; goto done; }
+                        if (gt[j] > 0) { a = m; fa = gt[j]; if (side == -1) fb *= 0.5; side = -1; }
+                        else { b = m; fb = gt[j]; b_real = 1; if (side == 1) fa *= 0.5; side = 1; }
+                        if (fb == 0.0) break;
+                    }
+                    if (!b_real) {
+                        if (ros_step(c, n, t, x, f0, J, ft, b - t, tmp, errv, W, piv)) { status = -2; goto done; }
+                        if (call3(kg, c, tmp, b, gt)) { status = -2; goto done; }
+                        if (!(gt[j] < -guard_eps)) continue;  /* false alarm for this guard at this point */
+                    }
+                    if (jbest < 0 || b < tbest) { tbest = b; jbest = j; }
                 }
-                if (jbest < 0 || b < tbest) { tbest = b; jbest = j; }
+                if (jbest >= 0 || at_end) break;
             }
         }
         double t_stop = t1;
@@ -240,19 +251,25 @@ int kiln_run(int n, int ng, const double* P, double t0, double t_end, const doub
             } else memcpy(tmp, x, n * sizeof(double));
             t_stop = tbest;
         }
-        /* samples on the output grid up to t_stop */
+        /* samples on the output grid up to t_stop; when they do not fit in the buffer, stop BEFORE this
+           step at the accepted point (t, x) (nothing of this step is written), so a restart continues
+           from an integrator state, never from an interpolated sample */
+        {
+            int need = 0;
+            for (double tn = t_next_out; tn <= t_stop * (1 + 1e-15) && tn <= t_end * (1 + 1e-15);
+                 tn = (k0 + nout + (++need)) * dt_out) {}
+            if (nout + need > max_out) {
+                /* the restart repeats this very step (same size from the same point): bit-identical */
+                status = 2; t_ev[0] = t; memcpy(x_ev, x, n * sizeof(double)); steps--;
+                h = t1 - t;
+                break;
+            }
+        }
         while (t_next_out <= t_stop * (1 + 1e-15) && t_next_out <= t_end * (1 + 1e-15)) {
-            if (nout >= max_out) { status = 2; break; }
             out_t[nout] = t_next_out;
             hermite(n, t, x, f0, t1, x1, f1, t_next_out, out_x + (size_t)nout * n);
             nout++;
             t_next_out = (k0 + nout) * dt_out;
-        }
-        if (status == 2) {
-            /* buffer full: restart from the last sample */
-            t_ev[0] = out_t[nout - 1];
-            memcpy(x_ev, out_x + (size_t)(nout - 1) * n, n * sizeof(double));
-            break;
         }
         if (jbest >= 0) {
             t_ev[0] = tbest; memcpy(x_ev, tmp, n * sizeof(double)); j_ev[0] = jbest; status = 1; break;
@@ -290,6 +307,7 @@ int kiln_check(void) {
 /* Outputs y_i = ko(x_i, t_i, P) of k samples; X is k x n and Y is k x ny, row per sample. */
 int kiln_outputs(int n, int ny, const double* P, int k, const double* T, const double* X, double* Y) {
     ctx_t* c = (ctx_t*)malloc(sizeof(ctx_t));
+    if (c == NULL) return -8;
     c->P = P;
     int status = 0;
     for (int i = 0; i < k; i++)
@@ -301,6 +319,7 @@ int kiln_outputs(int n, int ny, const double* P, int k, const double* T, const d
 /* Guards g, selectors and dg/dt at one point (the simulator's mode cascade). */
 int kiln_guard(const double* P, const double* x, double t, double* g, double* sel, double* gdot) {
     ctx_t* c = (ctx_t*)malloc(sizeof(ctx_t));
+    if (c == NULL) return -8;
     c->P = P;
     c->arg[0] = x; c->arg[1] = &t; c->arg[2] = P;
     c->res[0] = g; c->res[1] = sel; c->res[2] = gdot;
@@ -312,6 +331,7 @@ int kiln_guard(const double* P, const double* x, double t, double* g, double* se
 /* Node speeds projected onto the mode's rigid links (momentum kept). */
 int kiln_project(const double* P, const double* x, double* out) {
     ctx_t* c = (ctx_t*)malloc(sizeof(ctx_t));
+    if (c == NULL) return -8;
     c->arg[0] = x; c->arg[1] = P;
     c->res[0] = out;
     int st = kp(c->arg, c->res, c->iw, c->w, 0);

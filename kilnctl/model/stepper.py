@@ -11,23 +11,49 @@ step run in C.
 from __future__ import annotations
 
 import ctypes
+import warnings
 from dataclasses import dataclass
 from importlib import resources
 
 import casadi as ca
 import numpy as np
 
+from ..errors import SimulationError
 from .compiled import compile_sources, generate_c
 
-__all__ = ["Stepper", "build_stepper", "STATUS"]
+__all__ = ["Stepper", "build_stepper", "STATUS", "GUARD_EPS", "NMAX"]
 
 #: meaning of kiln_run's return codes
 STATUS = {0: "reached t_end", 1: "event", 2: "output buffer full", -1: "singular iteration matrix",
           -2: "model function error or non-finite state", -3: "step size underflow", -4: "too many steps",
-          -5: "too many states or guards for the compiled stepper", -6: "a state ran away"}
+          -5: "too many states or guards for the compiled stepper", -6: "a state ran away",
+          -7: "bad arguments to the compiled stepper", -8: "out of memory in the compiled stepper"}
+
+#: a guard has crossed when it is below -GUARD_EPS (guards are scaled to order one), so a guard that
+#: starts on its boundary does not fire on round-off or on integration error below the default
+#: absolute tolerance; the one definition, used by both engines and passed to the C stepper
+GUARD_EPS = 1e-7
+#: most states and most guards the C stepper handles (its fixed arrays, ``NMAX``/``GMAX`` in rosenbrock.c)
+NMAX = 64
 
 _D = ctypes.POINTER(ctypes.c_double)
 _I = ctypes.POINTER(ctypes.c_int)
+_d, _i = ctypes.c_double, ctypes.c_int
+_SIGNATURES = {
+    "kiln_run": [_i, _i, _D, _d, _d, _D, _d, _d, _d, _d, _d, _d, _i, _D, _D, _I, _D, _D, _I, _i, _I, _D, _d, _d],
+    "kiln_check": [],
+    "kiln_outputs": [_i, _i, _D, _i, _D, _D, _D],
+    "kiln_guard": [_D, _D, _d, _D, _D, _D],
+    "kiln_project": [_D, _D, _D],
+}
+
+
+def _vector(name, v, n):
+    """A contiguous float64 copy of v, checked to have n finite-or-not entries (length is what C trusts)."""
+    a = np.ascontiguousarray(v, dtype=float).ravel()
+    if a.size != n:
+        raise SimulationError(f"compiled stepper: {name} has {a.size} entries, the compiled mode expects {n}")
+    return a
 
 
 @dataclass
@@ -46,52 +72,87 @@ class Stepper:
     n: int
     ng: int
     ny: int
+    n_p: int = -1
+
+    def _params(self, P):
+        return _vector("P", P, self.n_p) if self.n_p >= 0 else np.ascontiguousarray(P, dtype=float).ravel()
 
     def outputs(self, P, T, X) -> np.ndarray:
         """Output signals at samples T (k,) with scaled states X (n x k); returns (ny x k)."""
-        T = np.ascontiguousarray(T, dtype=float)
-        Xr = np.ascontiguousarray(np.asarray(X, dtype=float).T)
-        P = np.ascontiguousarray(P, dtype=float)
+        T = np.ascontiguousarray(T, dtype=float).ravel()
+        X = np.asarray(X, dtype=float)
+        if X.ndim != 2 or X.shape != (self.n, len(T)):
+            raise SimulationError(f"compiled stepper: states of shape {X.shape}, expected ({self.n}, {len(T)})")
+        Xr = np.ascontiguousarray(X.T)
+        P = self._params(P)
         Y = np.empty((len(T), self.ny))
         st = self.lib.kiln_outputs(self.n, self.ny, P.ctypes.data_as(_D), len(T), T.ctypes.data_as(_D),
                                    Xr.ctypes.data_as(_D), Y.ctypes.data_as(_D))
         if st != 0:
-            raise RuntimeError(f"compiled output evaluation failed ({STATUS.get(st, st)})")
+            raise SimulationError(f"compiled output evaluation failed ({STATUS.get(st, st)})")
         return Y.T
 
     def guard(self, P, x, t):
         """Guards, selectors and their time derivatives at (x, t): three arrays of length ng."""
-        P, x = np.ascontiguousarray(P, dtype=float), np.ascontiguousarray(x, dtype=float)
+        P, x = self._params(P), _vector("x", x, self.n)
         m = max(self.ng, 1)
         g, sel, gd = np.empty(m), np.empty(m), np.empty(m)
-        if self.lib.kiln_guard(P.ctypes.data_as(_D), x.ctypes.data_as(_D), ctypes.c_double(t), g.ctypes.data_as(_D),
+        if self.lib.kiln_guard(P.ctypes.data_as(_D), x.ctypes.data_as(_D), float(t), g.ctypes.data_as(_D),
                                sel.ctypes.data_as(_D), gd.ctypes.data_as(_D)):
-            raise RuntimeError("compiled guard evaluation failed")
+            raise SimulationError("compiled guard evaluation failed")
         return g[: self.ng], sel[: self.ng], gd[: self.ng]
 
     def project(self, P, x):
         """Scaled state with node speeds projected onto the mode's rigid links."""
-        P, x = np.ascontiguousarray(P, dtype=float), np.ascontiguousarray(x, dtype=float)
+        P, x = self._params(P), _vector("x", x, self.n)
         out = np.empty(self.n)
         if self.lib.kiln_project(P.ctypes.data_as(_D), x.ctypes.data_as(_D), out.ctypes.data_as(_D)):
-            raise RuntimeError("compiled projection failed")
+            raise SimulationError("compiled projection failed")
         return out
 
     def run(self, P, t0, t_end, x0, dt_out, rtol, atol, hmax, h0, event_tol, max_out=4096, max_steps=500000,
-            runaway=1e6):
+            runaway=1e6, guard_eps=GUARD_EPS):
         """Integrate from (t0, x0) to t_end or the first guard crossing.
+
+        Parameters
+        ----------
+        P : array_like
+            Parameter vector of the plant.
+        t0, t_end : float
+            Start and end time [s].
+        x0 : array_like
+            Scaled state at t0 (length n).
+        dt_out : float
+            Output and guard-check grid [s] (samples at k*dt_out).
+        rtol, atol : float
+            Integration tolerances (atol on scaled states).
+        hmax, h0 : float
+            Largest step and first step [s] (h0 <= 0: a default).
+        event_tol : float
+            Width [s] to which a guard crossing is located.
+        max_out : int
+            Output buffer length; when it is full, the run stops at the last
+            accepted integrator point (status 2) and the caller continues from
+            there, so results do not depend on max_out.
+        max_steps : int
+            Steps allowed in this call.
+        runaway : float
+            Largest magnitude of a scaled state.
+        guard_eps : float
+            A guard has crossed when below -guard_eps.
 
         Returns
         -------
         dict
             ``status`` (see :data:`STATUS`), ``t`` and ``x`` (samples on the grid
-            t0 + k*dt_out), ``t_ev``, ``x_ev`` (end or event point), ``j_ev``
-            (guard index), ``n_steps``, ``h`` (last step size).
+            t0 + k*dt_out), ``t_ev``, ``x_ev`` (end, event or restart point),
+            ``j_ev`` (guard index), ``n_steps``, ``h`` (next step size).
         """
+        max_out = int(max_out)
         out_t = np.empty(max_out)
         out_x = np.empty((max_out, self.n))
-        x0 = np.ascontiguousarray(x0, dtype=float)
-        P = np.ascontiguousarray(P, dtype=float)
+        x0 = _vector("x0", x0, self.n)
+        P = self._params(P)
         x_ev = np.empty(self.n)
         t_ev = np.zeros(1)
         n_out = ctypes.c_int(0)
@@ -103,8 +164,8 @@ class Stepper:
             x0.ctypes.data_as(_D), ctypes.c_double(dt_out), ctypes.c_double(rtol), ctypes.c_double(atol),
             ctypes.c_double(hmax), ctypes.c_double(h0), ctypes.c_double(event_tol), max_out,
             out_t.ctypes.data_as(_D), out_x.ctypes.data_as(_D), ctypes.byref(n_out), t_ev.ctypes.data_as(_D),
-            x_ev.ctypes.data_as(_D), ctypes.byref(j_ev), max_steps, ctypes.byref(n_steps), ctypes.byref(h_last),
-            ctypes.c_double(runaway))
+            x_ev.ctypes.data_as(_D), ctypes.byref(j_ev), int(max_steps), ctypes.byref(n_steps), ctypes.byref(h_last),
+            ctypes.c_double(runaway), ctypes.c_double(guard_eps))
         k = n_out.value
         # copies of the used rows, so the full buffers are freed now
         return {"status": st, "t": out_t[:k].copy(), "x": out_x[:k].T.copy(), "t_ev": float(t_ev[0]), "x_ev": x_ev,
@@ -132,10 +193,15 @@ def build_stepper(f, xs, t, P, g, y, sel, gdot, proj) -> Stepper | None:
     Returns
     -------
     Stepper or None
-        None when no C compiler is available or compiling fails.
+        None when no C compiler is available, compiling fails, the library
+        does not load, or the mode is beyond the stepper's fixed sizes (each
+        but the first with a warning: the caller falls back to CVODES).
     """
     n, ng = xs.numel(), g.numel()
-    if n > 64 or ng > 64:
+    if n > NMAX or ng > NMAX:
+        warnings.warn(f"kilnctl: a mode with {n} states and {ng} guards is beyond the compiled stepper's limit of "
+                      f"{NMAX}; falling back to CVODES (guards checked every dt only, slower)", RuntimeWarning,
+                      stacklevel=3)
         return None
     gg = g if ng else ca.SX.ones(1)
     funcs = [ca.Function("kf", [xs, t, P], [f]),
@@ -150,12 +216,19 @@ def build_stepper(f, xs, t, P, g, y, sel, gdot, proj) -> Stepper | None:
     lib_path = compile_sources("mode", {"gen.c": generate_c(funcs, "gen"), "rosenbrock.c": driver})
     if lib_path is None:
         return None
-    lib = ctypes.CDLL(str(lib_path))
-    lib.kiln_run.restype = ctypes.c_int
-    lib.kiln_check.restype = ctypes.c_int
-    if lib.kiln_check() != 0:
+    try:
+        lib = ctypes.CDLL(str(lib_path))
+        for name, args in _SIGNATURES.items():
+            fn = getattr(lib, name)
+            fn.argtypes = args
+            fn.restype = ctypes.c_int
+    except (OSError, AttributeError) as exc:
+        warnings.warn(f"kilnctl: the cached stepper library {lib_path} does not load ({exc}); falling back to "
+                      "CVODES. Delete that file (or set KILNCTL_CACHE to a fresh folder) to rebuild it.",
+                      RuntimeWarning, stacklevel=3)
         return None
-    lib.kiln_outputs.restype = ctypes.c_int
-    lib.kiln_guard.restype = ctypes.c_int
-    lib.kiln_project.restype = ctypes.c_int
-    return Stepper(lib, n, ng, y.numel())
+    if lib.kiln_check() != 0:
+        warnings.warn("kilnctl: this mode's generated code needs more work memory than the compiled stepper has; "
+                      "falling back to CVODES", RuntimeWarning, stacklevel=3)
+        return None
+    return Stepper(lib, n, ng, y.numel(), P.numel())
