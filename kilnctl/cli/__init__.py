@@ -16,7 +16,7 @@ from ..errors import KilnctlError
 
 #: subcommand modules, in the order ``kilnctl --help`` lists them
 COMMANDS = ("params_cmd", "design_cmd", "simulate_cmd", "verify_cmd", "optimize_cmd", "compare_cmd",
-            "diagnose_cmd", "sweep_cmd")
+            "diagnose_cmd", "split_cmd", "sweep_cmd")
 
 
 class _Parser(argparse.ArgumentParser):

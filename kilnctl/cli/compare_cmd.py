@@ -27,8 +27,11 @@ def register(sub) -> None:
         description="Simulate the experiment of a measured record (docs/measurements.md) and compare: fit % "
                     "per channel as MATLAB's compare defines it, residual whiteness and cross-correlation with "
                     "99 % bands, residual spectrum, and the intervals where |residual| > 3 sigma.")
-    p.add_argument("--data", required=True, metavar="FILE", help="measured record (CSV: time_s, current_A, speed_rpm "
-                   "[, speed_ref_rpm])")
+    p.add_argument("--data", required=True, metavar="FILE", help="measured record: CSV, .xlsx, .parquet or .mat "
+                   "with time_s, current_A, speed_rpm [, speed_ref_rpm] (docs/measurements.md)")
+    p.add_argument("--columns", metavar="MAP", help="the record's own column names, e.g. "
+                   "current_A=I_arm,speed_rpm=n_mot,time_s=t; units in the header or here ('time_s=t [ms]') are "
+                   "converted (default: the setup's [measurement] columns)")
     p.add_argument("--config", metavar="FILE", help="setup of the experiment (kilnctl TOML parameter file, "
                    "optional [measurement] section); default: the paper's Table 1")
     p.add_argument("--model", choices=("macro", "micro"), default="macro", help="model to compare (default macro)")
@@ -75,15 +78,16 @@ def run(args) -> int:
         0 on success.
     """
     from ..measure.effects import effect_components
-    from ..measure.io import load_setup, read_csv
+    from ..measure.io import load_setup, read_record, record_columns
     from ..measure.compare import compare
 
     setup = load_setup(args.config)
     names = parse_names(args.effects)
     effects, params = effect_components(names, setup.params, model=args.model)
-    data = read_csv(args.data, setup.params)
+    data = read_record(args.data, setup.params, record_columns(setup, args.columns))
     c = compare(data, params, model=args.model, effects=effects, t0=setup.options.get("t0_s"))
     d = c.to_dict()
+    d["record_notes"] = list(data.notes)  # how the file was read: units converted, columns ignored
     if args.report:
         from ..measure.report import write_comparison_report
 
@@ -92,6 +96,8 @@ def run(args) -> int:
         print_json(d)
         return 0
     print("\n".join(c.summary_lines()))
+    for note in data.notes:
+        print(f"  record: {note}")
     if args.report:
         print(f"  wrote {args.report}/compare.html, compare.json, compare.png")
     return 0

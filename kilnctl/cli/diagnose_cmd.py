@@ -30,7 +30,11 @@ def register(sub) -> None:
         description="Calibrate the base model on a measured record, refit it with each effect of the catalogue, "
                     "and keep the effects supported by both BIC and a held-out part of the record (greedy). "
                     "See docs/tutorial_diagnose.md.")
-    p.add_argument("--data", required=True, metavar="FILE", help="measured record (CSV, docs/measurements.md)")
+    p.add_argument("--data", required=True, metavar="FILE", help="measured record: CSV, .xlsx, .parquet or .mat "
+                   "with time_s, current_A, speed_rpm [, speed_ref_rpm] (docs/measurements.md)")
+    p.add_argument("--columns", metavar="MAP", help="the record's own column names, e.g. "
+                   "current_A=I_arm,speed_rpm=n_mot,time_s=t; units in the header or here ('time_s=t [ms]') are "
+                   "converted (default: the setup's [measurement] columns)")
     p.add_argument("--config", metavar="FILE", help="setup of the experiment (kilnctl TOML parameter file with an "
                    "optional [measurement] section); default: the paper's Table 1")
     p.add_argument("--model", choices=("macro", "micro"), default="macro", help="base model (default macro)")
@@ -60,14 +64,14 @@ def run(args) -> int:
         0 on success.
     """
     from ..measure.diagnose import DEFAULT_CALIBRATE, Diagnosis
-    from ..measure.io import load_setup, read_csv
+    from ..measure.io import load_setup, read_record, record_columns
 
     setup = load_setup(args.config)
     calibrate = (parse_names(args.calibrate, "--calibrate") if args.calibrate
                  else tuple(setup.options.get("calibrate", DEFAULT_CALIBRATE)))
     candidates = (parse_names(args.candidates, "--candidates") if args.candidates
                   else setup.options.get("candidates"))
-    data = read_csv(args.data, setup.params)
+    data = read_record(args.data, setup.params, record_columns(setup, args.columns))
     d = Diagnosis(setup.params, calibrate, candidates, model=args.model, holdout=args.holdout,
                   t0=setup.options.get("t0_s"))
     progress = None if (args.quiet or args.json) else (lambda s: print(s, file=sys.stderr, flush=True))
@@ -77,6 +81,8 @@ def run(args) -> int:
         print_json(d.to_dict())
         return 0
     print(d.summary())
+    for note in data.notes:
+        print(f"  record: {note}")
     for path in written:
         if path.suffix == ".html":
             print(f"  wrote {path} (and {len(written) - 1} more files)")

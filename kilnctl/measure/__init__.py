@@ -2,7 +2,8 @@
 
 The loop an engineer follows when the model does not match the kiln:
 
-1. :func:`read_csv` a measured start-up (``docs/measurements.md``);
+1. :func:`read_record` a measured start-up (CSV, Excel, Parquet, MATLAB; ``docs/measurements.md``),
+   or cut several out of a long log with :func:`split_startups`;
 2. :func:`compare` it with the model: fit %, residual tests, where it fails;
 3. :class:`Calibration` fits chosen parameters by simulation-error least squares;
 4. :class:`Diagnosis` tries each effect of the :data:`CATALOGUE` and keeps the
@@ -13,10 +14,12 @@ from .calibrate import Calibration, holdout_masks, sweep
 from .compare import Comparison, compare
 from .diagnose import Diagnosis
 from .effects import CATALOGUE, Effect
-from .io import Experiment, Measurement, Setup, load_setup, read_csv
+from .io import Experiment, Measurement, Setup, load_setup, read_csv, read_record
+from .split import Startups, split_startups
 
 __all__ = ["CATALOGUE", "Calibration", "Comparison", "Diagnosis", "Effect", "Experiment", "Measurement", "Setup",
-           "compare", "holdout_masks", "load_setup", "read_csv", "sweep", "example_paths"]
+           "Startups", "compare", "holdout_masks", "load_setup", "read_csv", "read_record", "split_startups", "sweep",
+           "example_paths"]
 
 
 def example_paths():

@@ -33,8 +33,8 @@ import numpy as np
 from ..errors import ConfigFileError, DataError, ParameterError, close_matches_hint
 from ..params import GROUPS, SPECS, Parameters
 
-__all__ = ["Measurement", "Setup", "Experiment", "read_csv", "load_setup", "REQUIRED", "OPTIONAL",
-           "MIN_DURATION_S", "MIN_SAMPLES", "GAP_FACTOR"]
+__all__ = ["Measurement", "Setup", "Experiment", "read_csv", "read_record", "load_setup", "REQUIRED", "OPTIONAL",
+           "MIN_DURATION_S", "MIN_SAMPLES", "GAP_FACTOR", "MAX_RECORD_S", "record_columns"]
 
 #: columns every record must have, with their units
 REQUIRED: dict[str, str] = {"time_s": "s", "current_A": "A", "speed_rpm": "rpm"}
@@ -101,6 +101,9 @@ class Measurement:
         File line number of each sample (for messages).
     notes : tuple of str
         Remarks made while reading (comment lines, ignored columns).
+    row_word : str
+        What ``lines`` counts: ``line`` (text file), ``row`` (spreadsheet,
+        Parquet) or ``sample`` (MATLAB file, arrays).
     """
 
     t: np.ndarray
@@ -108,6 +111,7 @@ class Measurement:
     source: str = "<arrays>"
     lines: np.ndarray | None = None
     notes: tuple = ()
+    row_word: str = "line"
 
     # --- construction ---------------------------------------------------------
     @classmethod
@@ -276,13 +280,15 @@ class Measurement:
                 "channels": {k: {"min": float(v.min()), "max": float(v.max())} for k, v in self.channels.items()},
                 "notes": list(self.notes)}
 
-    def to_csv(self, path=None) -> str:
+    def to_csv(self, path=None, digits: int = 6) -> str:
         """Write the record in the kilnctl CSV format (whole or not at all) and return the text.
 
         Parameters
         ----------
         path : path-like, optional
             Destination; refused if it exists (kilnctl never overwrites data).
+        digits : int, default 6
+            Significant digits of the channels (time: decimals).
 
         Returns
         -------
@@ -295,7 +301,7 @@ class Measurement:
         cols = [self.t] + [self.channels[k] for k in self.channels]
         rows = [",".join(names)]
         for k in range(self.n):
-            rows.append(",".join(f"{c[k]:.6g}" if j else f"{c[k]:.6f}" for j, c in enumerate(cols)))
+            rows.append(",".join(f"{c[k]:.{digits}g}" if j else f"{c[k]:.{digits}f}" for j, c in enumerate(cols)))
         text = "\n".join(rows) + "\n"
         if path is not None:
             if Path(path).exists():
@@ -305,13 +311,15 @@ class Measurement:
 
 
 # --- reading ---------------------------------------------------------------------
-def _where(source, lines, k, column=None, row_word="line"):
+def _where(source, lines, k, column=None, row_word="line", labels=None):
     s = f"{source}: {row_word} {int(lines[k])}"
-    return s + (f", column {column!r}" if column else "")
+    if not column:
+        return s
+    return s + ", column " + ((labels or {}).get(column) or repr(column))
 
 
-def read_csv(path, params: Parameters | None = None) -> Measurement:
-    """Read and check a measured record (see the module docstring for the format).
+def read_csv(path, params: Parameters | None = None, columns=None) -> Measurement:
+    """Read and check a measured record in CSV (see the module docstring for the format).
 
     Parameters
     ----------
@@ -319,8 +327,11 @@ def read_csv(path, params: Parameters | None = None) -> Measurement:
         The CSV file.  Comma, semicolon or tab separated; lines starting
         with ``#`` and blank lines are skipped.
     params : Parameters, optional
-        Setup of the experiment, used by the unit checks (``omega_ref``
-        [rpm], ``I_max`` [A]); the defaults otherwise.
+        Setup of the experiment, used by the unit and plausibility checks
+        (``omega_ref`` [rpm], ``ramp_rate`` [rpm/s], ``I_max`` [A]); the
+        defaults otherwise.
+    columns : str or dict, optional
+        Column mapping, as for :func:`read_record`.
 
     Returns
     -------
@@ -331,82 +342,301 @@ def read_csv(path, params: Parameters | None = None) -> Measurement:
     DataError
         Missing or duplicated columns, a non-numeric or empty cell, a row of
         the wrong length, non-increasing time, NaN, a gap (a step above
-        5 x the median), a record shorter than 2 s or 50 samples, or a
+        5 x the median), a record shorter than 2 s or 50 samples, a time
+        axis implausible for a start-up (milliseconds read as seconds), or a
         channel whose scale suggests the wrong unit.  The message names the
         file, the line and the column.
     """
+    from .tables import _read_text
+
     path = Path(path)
-    try:
-        raw = path.read_bytes()
-    except FileNotFoundError:
-        raise DataError(f"{path}: no such measurement file") from None
-    except IsADirectoryError:
-        raise DataError(f"{path}: is a folder, not a measurement file") from None
-    try:
-        text = raw.decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        raise DataError(f"{path}: not a UTF-8 text file ({exc.reason} at byte {exc.start})") from None
-    header = None
-    rows: list[tuple[int, list[str]]] = []
-    notes = []
-    delim = ","
-    for lineno, line in enumerate(text.splitlines(), start=1):
-        s = line.strip()
-        if not s or s.startswith("#"):
-            continue
-        if header is None:
-            delim = ";" if (";" in s and "," not in s) else ("\t" if ("\t" in s and "," not in s) else ",")
-            header = (lineno, [h.strip() for h in next(csv.reader([s], delimiter=delim))])
-            continue
-        rows.append((lineno, [c.strip() for c in next(csv.reader([s], delimiter=delim))]))
-    if header is None:
-        raise DataError(f"{path}: empty file (no header line with {', '.join(REQUIRED)})")
-    hline, names = header
+    if path.is_dir():
+        raise DataError(f"{path}: is a folder, not a measurement file")
+    if not path.exists():
+        raise DataError(f"{path}: no such measurement file")
+    return _interpret(_read_text(path), params, columns)
+
+
+def read_record(path, params: Parameters | None = None, columns=None, *, log: bool = False) -> Measurement:
+    """Read and check a measured record from a CSV, Excel, Parquet or MATLAB file.
+
+    The format comes from the suffix (``.xlsx``: first sheet; ``.parquet``;
+    ``.mat``: one vector per channel, or one struct of them; anything else is
+    read as CSV).  Columns are found by kilnctl's names (``time_s``,
+    ``current_A``, ``speed_rpm``, ``speed_ref_rpm``) or by ``columns``.  A
+    unit written in the header (``I_arm [kA]``, ``n_mot [1/min]``,
+    ``t [ms]``) or in the mapping (``time_s=t [ms]``) is converted to s, A
+    and rpm; a time column of ISO 8601 timestamps (or spreadsheet/Parquet
+    date-times) becomes seconds since the first sample.  The file is only
+    read.
+
+    Parameters
+    ----------
+    path : path-like
+        The record.
+    params : Parameters, optional
+        Setup of the experiment, used by the unit and plausibility checks
+        (``omega_ref`` [rpm], ``ramp_rate`` [rpm/s], ``I_max`` [A]).
+    columns : str or dict, optional
+        Channel -> column in the file, ``"current_A=I_arm,speed_rpm=n_mot"``
+        or ``{"current_A": "I_arm"}``; a unit may follow the column name
+        (``"time_s=t [ms]"``).
+    log : bool, default False
+        Read a long log for :func:`kilnctl.measure.split_startups`: gaps
+        (logger pauses) are allowed and the record may be longer than
+        :data:`MAX_RECORD_S` (one hour: a start-up, not a shift).
+
+    Returns
+    -------
+    Measurement
+
+    Raises
+    ------
+    DataError
+        Everything :func:`read_csv` refuses, and an unknown or ambiguous
+        unit, a mapping naming a column the file lacks, a cell that is
+        neither a number nor a timestamp.  The message names the file, the
+        line/row/sample and the column, and the fix.
+    """
+    from .tables import read_table
+
+    return _interpret(read_table(path), params, columns, log=log)
+
+
+def _interpret(table, params, columns, *, log=False) -> Measurement:
+    """Find kilnctl's channels in a RawTable, convert them to s, A, rpm, and check the record."""
+    from .tables import QUANTITY, convert, parse_columns, split_unit
+
+    columns = parse_columns(columns) if not isinstance(columns, dict) else parse_columns(dict(columns))
+    src, names, notes = table.source, table.names, list(table.notes)
+    head = f"{src}: {table.header}" if table.header else src  # where the header is, for messages
     seen = set()
     for j, nm in enumerate(names):
         if not nm:
-            raise DataError(f"{path}: line {hline}, column {j + 1}: empty column name in the header")
+            raise DataError(f"{head}, column {j + 1}: empty column name in the header")
         if nm in seen:
-            raise DataError(f"{path}: line {hline}: column {nm!r} appears twice in the header")
+            raise DataError(f"{head}: column {nm!r} appears twice in the header")
         seen.add(nm)
-    for req, unit in REQUIRED.items():
-        if req not in names:
-            hint = close_matches_hint(req, names)
-            raise DataError(f"{path}: line {hline} (header): missing column {req!r} [{unit}]; "
-                            f"the header has {', '.join(names)}; {hint}")
-    if not rows:
-        raise DataError(f"{path}: no data rows after the header (line {hline})")
-    data = np.empty((len(rows), len(names)))
-    lines = np.array([r[0] for r in rows])
-    for i, (lineno, cells) in enumerate(rows):
-        if len(cells) != len(names):
-            raise DataError(f"{path}: line {lineno}: {len(cells)} cells, but the header (line {hline}) "
-                            f"has {len(names)} columns")
-        for j, c in enumerate(cells):
-            if c == "":
-                raise DataError(f"{path}: line {lineno}, column {names[j]!r}: empty cell (missing value); "
-                                "kilnctl does not fill gaps: cut the record or fill the value yourself")
+    parsed = [split_unit(nm) for nm in names]
+    found: dict[str, tuple[int, str | None]] = {}
+    for ch in list(REQUIRED) + list(OPTIONAL):
+        if ch in columns:
+            want = columns[ch]
+            wbase, wunit = split_unit(want)
+            hits = [j for j, nm in enumerate(names) if nm == want] or \
+                   [j for j, (b, _) in enumerate(parsed) if b == wbase]
+            if not hits:
+                raise DataError(f"{src}: the column mapping gives {ch}={want}, but the file has no column "
+                                f"{wbase!r}; it has {', '.join(names)}; {close_matches_hint(wbase, names)}")
+            if len(hits) > 1:
+                raise DataError(f"{src}: {ch}={want} matches several columns ({', '.join(names[j] for j in hits)});"
+                                " give the full name with its unit")
+            j = hits[0]
+            hunit = parsed[j][1]
+            if wunit and hunit and wunit.lower() != hunit.lower():
+                raise DataError(f"{head}: column {names[j]!r} says [{hunit}], but the column "
+                                f"mapping says {ch}={want}; remove one of the two units")
+            found[ch] = (j, wunit or hunit)
+        else:
+            hits = [j for j, nm in enumerate(names) if nm == ch] or \
+                   [j for j, (b, _) in enumerate(parsed) if b == ch]
+            if hits:
+                found[ch] = (hits[0], parsed[hits[0]][1])
+            elif ch in REQUIRED:
+                raise DataError(f"{head}: missing column {ch!r} [{REQUIRED[ch]}]; "
+                                f"the header has {', '.join(names)}; {_mapping_hint(ch, parsed, columns, found)}")
+    by_col: dict[int, str] = {}
+    for ch, (j, _) in found.items():
+        if j in by_col:
+            raise DataError(f"{src}: column {names[j]!r} is mapped to both {by_col[j]} and {ch}; each channel needs "
+                            "its own column (check --columns or [measurement] columns)")
+        by_col[j] = ch
+    labels = {ch: (repr(names[j]) if names[j] == ch else f"{names[j]!r} (read as {ch})")
+              for ch, (j, _) in found.items()}
+    tj = found["time_s"][0]
+    n = len(table.columns[tj])
+    for j, col in enumerate(table.columns):
+        if len(col) != n:
+            used = [ch for ch, (jj, _) in found.items() if jj == j]
+            if used:
+                raise DataError(f"{src}: {names[j]!r} (read as {used[0]}) has {len(col)} samples, the time "
+                                f"{names[tj]!r} has {n}: the channels must have one value per time")
+    rows = table.rows[:n]
+    arrays: dict[str, np.ndarray] = {}
+    t, tnote = _time_seconds(table, tj, labels["time_s"], n)
+    if tnote:
+        notes.append(tnote)
+    arrays["time_s"] = t
+    for ch, (j, unit) in found.items():
+        if ch == "time_s":
+            if unit is not None and tnote:
+                raise DataError(f"{src}: column {labels[ch]} holds timestamps; it needs no unit [{unit}]")
+        else:
+            arrays[ch] = _numbers(table, j, labels[ch], required=True)
+        if not (ch == "time_s" and tnote):
+            arrays[ch], note = convert(arrays[ch], unit, ch, f"{src}: column {labels[ch]}")
+            if note:
+                notes.append(note)
+    used_cols = {j for j, _ in found.values()}
+    kept, dropped = [], []
+    for j, nm in enumerate(names):
+        if j in used_cols:
+            continue
+        if len(table.columns[j]) != n:
+            dropped.append(f"{nm} ({len(table.columns[j])} samples, not {n})")
+            continue
+        if nm in QUANTITY:  # a kilnctl name mapped elsewhere
+            dropped.append(f"{nm} (--columns maps {nm} to {columns[nm]!r})" if nm in columns else nm)
+            continue
+        a = _numbers(table, j, repr(nm), required=False)
+        if a is None:
+            dropped.append(f"{nm} (not numeric)")
+        else:
+            arrays[nm] = a
+            kept.append(nm)
+    if kept:
+        notes.append(f"extra columns kept but not compared: {', '.join(kept)}")
+    if dropped:
+        notes.append(f"columns ignored: {', '.join(dropped)}")
+    return _checked(arrays, rows, src, params, tuple(notes), row_word=table.row_word, labels=labels, log=log,
+                    time_name=parsed[tj][0])
+
+
+def _mapping_hint(missing, parsed, columns, found) -> str:
+    """Suggest a --columns mapping for the missing channels from the units written in the header."""
+    from .tables import QUANTITY
+
+    taken = {j for j, _ in found.values()}
+    guess = {}
+    for ch in REQUIRED:
+        if ch in found or ch in columns:
+            continue
+        for j, (base, unit) in enumerate(parsed):
+            if j not in taken and unit and _unit_quantity(unit) == QUANTITY[ch]:
+                guess[ch] = base
+                taken.add(j)
+                break
+    where = " (or columns in the setup's [measurement] section)"
+    if missing in guess:
+        return "map yours with --columns " + ",".join(f"{k}={v}" for k, v in guess.items()) + where
+    hint = close_matches_hint(missing, [b for b, _ in parsed])
+    return f"{hint} (map a column of another name with --columns {missing}=NAME{where})"
+
+
+def _unit_quantity(unit: str):
+    from .tables import UNITS
+
+    return next((q for q, tab in UNITS.items() if unit.strip().lower() in tab), None)
+
+
+def _cell_missing(c) -> bool:
+    return c is None or (isinstance(c, float) and math.isnan(c)) or (isinstance(c, str) and not c)
+
+
+def _numbers(table, j, label, required):
+    """Column j as floats; a bad cell is an error (required) or makes the column None (extra columns)."""
+    col = table.columns[j]
+    if col.dtype.kind in "fiub":
+        out = col.astype(float)
+        return out if (required or np.isfinite(out).all()) else None
+    try:
+        if col.dtype.kind != "O" or any(_cell_missing(c) for c in col):
+            raise ValueError
+        out = np.array(col, dtype=float)
+        return out if (required or np.isfinite(out).all()) else None
+    except (TypeError, ValueError):
+        if not required:
+            return None
+    for k, c in enumerate(col):
+        if _cell_missing(c) or (isinstance(c, str) and not c.strip()):
+            raise DataError(f"{table.where(k)}, column {label}: empty cell (missing value); kilnctl does not fill "
+                            "gaps: cut the record or fill the value yourself")
+        try:
+            float(c)
+        except (TypeError, ValueError):
+            hint = " (decimal comma? write 1.5, not 1,5)" if isinstance(c, str) and "," in c else ""
+            raise DataError(f"{table.where(k)}, column {label}: {c!r} is not a number{hint}") from None
+    raise DataError(f"{table.source}: column {label}: not numeric")  # pragma: no cover - every cell converted
+
+
+def _time_seconds(table, j, label, n):
+    """The time column in seconds: numbers as they are, timestamps as seconds since the first sample."""
+    col = table.columns[j][:n]
+    utc = False
+    if col.dtype.kind == "M":
+        stamps = col.astype("datetime64[ns]")
+    else:
+        if col.dtype.kind != "O":
+            return col.astype(float), None
+        first = next((c for c in col if not _cell_missing(c)), None)
+        is_number = isinstance(first, (int, float, np.number)) and not isinstance(first, bool)
+        if isinstance(first, str):
             try:
-                data[i, j] = float(c)
+                float(first)
+                is_number = True
             except ValueError:
-                hint = " (decimal comma? write 1.5, not 1,5)" if "," in c or (delim == ";" and "," in c) else ""
-                raise DataError(f"{path}: line {lineno}, column {names[j]!r}: {c!r} is not a number{hint}") from None
-    arrays = {nm: data[:, j] for j, nm in enumerate(names)}
-    extra = [nm for nm in names if nm not in REQUIRED and nm not in OPTIONAL]
-    if extra:
-        notes.append(f"extra columns kept but not compared: {', '.join(extra)}")
-    return _checked(arrays, lines, str(path), params, tuple(notes), row_word="line")
+                pass
+        if first is None or is_number:
+            return _numbers(table, j, label, required=True)[:n], None
+        stamps, utc = _parse_stamps(table, col, label)
+    bad = np.isnat(stamps)
+    if bad.any():
+        k = int(np.argmax(bad))
+        raise DataError(f"{table.where(k)}, column {label}: empty cell (missing time); kilnctl does not fill gaps")
+    ns = (stamps - stamps[0]).astype("timedelta64[ns]").astype(np.int64)
+    start = np.datetime_as_string(stamps[0], unit="ms")
+    return ns * 1e-9, f"time from timestamps: t = 0 s at {start}" + (" UTC" if utc else "")
 
 
-def _checked(arrays, lines, source, params, notes, row_word) -> Measurement:
+def _parse_stamps(table, col, label):
+    """ISO 8601 strings or date-time cells -> datetime64[ns]; those with a UTC offset are compared in UTC."""
+    import datetime as _dt
+
+    out = np.empty(len(col), dtype="datetime64[ns]")
+    kinds = set()
+    for k, c in enumerate(col):
+        if _cell_missing(c) or (isinstance(c, str) and not c.strip()):
+            raise DataError(f"{table.where(k)}, column {label}: empty cell (missing time); kilnctl does not fill gaps")
+        if isinstance(c, np.datetime64):
+            out[k] = c
+            kinds.add("naive")
+            continue
+        d = c
+        if isinstance(c, str):
+            try:
+                d = _dt.datetime.fromisoformat(c.strip())
+            except ValueError:
+                d = None
+        if not isinstance(d, _dt.datetime):
+            raise DataError(f"{table.where(k)}, column {label}: {c!r} is neither a number of seconds nor an ISO "
+                            "8601 timestamp (e.g. 2024-03-01T06:15:00.020); give the time in one form for every row")
+        if d.tzinfo is not None:
+            d = d.astimezone(_dt.timezone.utc).replace(tzinfo=None)
+            kinds.add("offset")
+        else:
+            kinds.add("naive")
+        if len(kinds) > 1:
+            raise DataError(f"{table.where(k)}, column {label}: {c!r}: the column mixes timestamps with and without "
+                            "a UTC offset; give all of them with one, or none")
+        out[k] = np.datetime64(d, "ns")
+    return out, "offset" in kinds
+
+
+def _checked(arrays, lines, source, params, notes, row_word, labels=None, log=False,
+             time_name="time_s") -> Measurement:
     """Run every check on the columns and return the Measurement."""
     params = Parameters() if params is None else params
+    labels = labels or {}
+
+    def where(k, column=None):
+        return _where(source, lines, k, column, row_word, labels)
+
     for name, a in arrays.items():
         bad = ~np.isfinite(a)
         if bad.any():
             k = int(np.argmax(bad))
             what = "NaN (missing value)" if np.isnan(a[k]) else f"{a[k]!r} (not finite)"
-            raise DataError(f"{_where(source, lines, k, name, row_word)}: {what}; kilnctl does not fill gaps: "
+            raise DataError(f"{where(k, name)}: {what}; kilnctl does not fill gaps: "
                             f"cut the record or fill the value yourself ({int(bad.sum())} such cells in this column)")
     t = arrays.pop("time_s")
     n = t.size
@@ -416,43 +646,111 @@ def _checked(arrays, lines, source, params, notes, row_word) -> Measurement:
     dts = np.diff(t)
     if (dts <= 0).any():
         k = int(np.argmax(dts <= 0)) + 1
-        raise DataError(f"{_where(source, lines, k, 'time_s', row_word)}: time {t[k]:.9g} s is not after "
+        raise DataError(f"{where(k, 'time_s')}: time {t[k]:.9g} s is not after "
                         f"the previous sample's {t[k - 1]:.9g} s ({row_word} {int(lines[k - 1])}); time must increase")
     med = float(np.median(dts))
-    if (dts > GAP_FACTOR * med).any():
+    if not log and (dts > GAP_FACTOR * med).any():
         k = int(np.argmax(dts > GAP_FACTOR * med)) + 1
-        raise DataError(f"{_where(source, lines, k, 'time_s', row_word)}: gap of {dts[k - 1]:.6g} s between "
+        raise DataError(f"{where(k, 'time_s')}: gap of {dts[k - 1]:.6g} s between "
                         f"{t[k - 1]:.6g} s and {t[k]:.6g} s (median step {med:.6g} s; a gap is a step above "
                         f"{GAP_FACTOR:g} x the median); cut the record at the gap or resample it")
     duration = float(t[-1] - t[0])
     if duration < MIN_DURATION_S or n < MIN_SAMPLES:
+        hint = ""
+        if 7e5 < t[0] < 8e5:
+            hint = ("; the time looks like MATLAB datenum (days since year 0): map it with --columns "
+                    "'time_s=NAME [d]'")
         raise DataError(f"{source}: record too short to say anything: {n} samples over {duration:.3g} s "
-                        f"(need at least {MIN_SAMPLES} samples and {MIN_DURATION_S:g} s)")
-    _check_units(arrays, lines, source, params, row_word)
-    m = Measurement(t=t, channels=arrays, source=source, lines=lines, notes=tuple(notes))
-    return m
+                        f"(need at least {MIN_SAMPLES} samples and {MIN_DURATION_S:g} s){hint}")
+    _check_time_scale(t, med, source, labels.get("time_s", "'time_s'"), params, math.inf if log else MAX_RECORD_S,
+                      time_name, arrays.get("speed_rpm"))
+    _check_units(arrays, lines, source, params, row_word, labels)
+    return Measurement(t=t, channels=arrays, source=source, lines=lines, notes=tuple(notes), row_word=row_word)
 
 
-def _check_units(arrays, lines, source, params, row_word):
+#: longest start-up record compare and diagnose accept [s]: a start-up, not a shift (split a log first)
+MAX_RECORD_S = 3600.0
+#: the median sample step must resolve the setup's ramp with at least this many samples
+RAMP_SAMPLES = 5
+#: a sample step below this is always fine for a start-up [s]
+STEP_ALWAYS_OK_S = 0.5
+
+
+def _fmt_span(s: float) -> str:
+    return f"{s / 3600:.3g} h" if s >= 7200 else (f"{s / 60:.3g} min" if s >= 120 else f"{s:.3g} s")
+
+
+def _rise_ratio(t, speed, params):
+    """How many times slower the measured speed rises (10 to 90 % of its top) than the setup's ramp; None if it
+    does not rise to half the set point."""
+    if speed is None or speed.size < 3:
+        return None
+    top = float(np.max(speed))
+    if not top > 0.5 * params.omega_ref or not params.ramp_rate > 0 or not speed[0] < 0.1 * top:
+        return None
+    k10, k90 = int(np.argmax(speed >= 0.1 * top)), int(np.argmax(speed >= 0.9 * top))
+    if k90 <= k10:
+        return None
+    return float(t[k90] - t[k10]) / (0.8 * top / params.ramp_rate)
+
+
+def _check_time_scale(t, dt, source, label, params, max_span, name="time_s", speed=None):
+    """Refuse a time axis that cannot be a start-up of this setup (milliseconds read as seconds)."""
+    t_ramp = params.omega_ref / params.ramp_rate if params.ramp_rate > 0 else math.inf
+    step_limit = max(t_ramp / RAMP_SAMPLES, STEP_ALWAYS_OK_S)
+    span = float(t[-1] - t[0])
+    problem = None
+    if dt > step_limit:
+        problem = (f"the median sample step is {dt:.4g} s, but the setup's ramp to {params.omega_ref:g} rpm at "
+                   f"{params.ramp_rate:g} rpm/s takes {t_ramp:.3g} s: fewer than {RAMP_SAMPLES} samples would "
+                   "cover the start-up")
+    elif span > max_span:
+        problem = (f"the record spans {_fmt_span(span)} (longest accepted: {_fmt_span(max_span)}); a start-up of "
+                   f"this setup ramps in {t_ramp:.3g} s")
+    if problem is None:
+        return
+    ms_fix = (f"write the unit in the header ('{name} [ms]') or map it with --columns 'time_s={name} [ms]' "
+              f"(or columns in the setup's [measurement] section)")
+    ms_ok = dt / 1000 <= step_limit and span / 1000 >= MIN_DURATION_S
+    ratio = _rise_ratio(t, speed, params)
+    if ms_ok and (ratio is None or ratio > 30):
+        read_ms = f"read in ms: step {dt:.4g} ms, span {_fmt_span(span / 1000)}"
+        if ratio is None and span > max_span:
+            fix = (f"if this is a long log, cut the start-ups out of it with kilnctl split-startups; if the time is "
+                   f"in milliseconds ({read_ms}), {ms_fix}")
+        else:
+            seen = "" if ratio is None else (f"; the measured speed rises {ratio:.0f} x slower than the setup's "
+                                             "ramp in seconds")
+            fix = f"the time column looks like milliseconds ({read_ms}{seen}): {ms_fix}"
+    elif span > max_span:
+        fix = "cut the start-ups out of the log with kilnctl split-startups"
+    else:
+        fix = f"give a record sampled at least every {step_limit:.3g} s"
+    raise DataError(f"{source}: column {label}: {problem}; {fix}")
+
+
+def _check_units(arrays, lines, source, params, row_word, labels=None):
     """Refuse channels whose scale suggests the wrong unit."""
     w_ref = params.omega_ref
     for name in ("speed_rpm", "speed_ref_rpm"):
         if name not in arrays:
             continue
+        at = _where(source, lines, int(np.argmax(np.abs(arrays[name]))), name, row_word, labels)
         a = arrays[name]
         top = float(np.max(np.abs(a)))
         k = int(np.argmax(np.abs(a)))
         rad = w_ref / _RPM_PER_RAD_S
         if 0.3 * rad < top < 0.12 * w_ref and top < 2.0 * rad:
             raise DataError(
-                f"{_where(source, lines, k, name, row_word)}: largest value {top:.4g} looks like rad/s, not rpm "
-                f"(the setup's speed reference {w_ref:g} rpm is {rad:.4g} rad/s); multiply by 60/(2*pi) = 9.549")
+                f"{at}: largest value {top:.4g} looks like rad/s, not rpm (the setup's speed reference {w_ref:g} rpm "
+                f"is {rad:.4g} rad/s); multiply by 60/(2*pi) = 9.549, or write the unit in the header "
+                f"('{name} [rad/s]')")
         kiln = w_ref / params.n
         if 0 < top < 0.3 * rad and top < 3.0 * kiln:
             raise DataError(
-                f"{_where(source, lines, k, name, row_word)}: largest value {top:.4g} looks like the kiln speed, "
+                f"{at}: largest value {top:.4g} looks like the kiln speed, "
                 f"not the motor speed (the setup's {w_ref:g} rpm motor speed is {kiln:.3g} rpm at the kiln, "
-                f"reduction n = {params.n:g}); multiply by n")
+                f"reduction n = {params.n:g}); multiply by n, or map the motor speed if the file has it")
         if name == "speed_rpm" and np.median(a[a.size // 2:]) < 0 < w_ref:
             raise DataError(
                 f"{source}: column 'speed_rpm' is negative over the second half of the record (median "
@@ -463,8 +761,9 @@ def _check_units(arrays, lines, source, params, row_word):
     k = int(np.argmax(np.abs(cur)))
     if 0 < top < 0.01 * params.I_max:
         raise DataError(
-            f"{_where(source, lines, k, 'current_A', row_word)}: largest value {top:.4g} looks like kA or a "
-            f"per-unit value, not A (the setup's current limit is {params.I_max:g} A); give the current in A")
+            f"{_where(source, lines, k, 'current_A', row_word, labels)}: largest value {top:.4g} looks like kA or a "
+            f"per-unit value, not A (the setup's current limit is {params.I_max:g} A); give the current in A, or "
+            "write the unit in the header ('current_A [kA]')")
 
 
 # --- setup file -------------------------------------------------------------------
@@ -473,6 +772,7 @@ MEASUREMENT_KEYS = {
     "t0_s": "time in the record at which the start-up (speed ramp) begins [s]",
     "calibrate": "list of base parameters to calibrate (default: mu_c, mu_s, m_v, J_v)",
     "candidates": "list of catalogue effects diagnose may try (default: all)",
+    "columns": "table: kilnctl channel -> column of the record, e.g. {current_A = \"I_arm\", time_s = \"t [ms]\"}",
 }
 
 
@@ -486,7 +786,8 @@ class Setup:
         The plant and controller as set up for the experiment.
     options : dict
         The ``[measurement]`` section: ``t0_s`` [s], ``calibrate`` (list of
-        parameter names), ``candidates`` (list of effect names).
+        parameter names), ``candidates`` (list of effect names), ``columns``
+        (channel -> column of the record, see :func:`read_record`).
     source : str
         The file, or ``<defaults>``.
     """
@@ -494,6 +795,26 @@ class Setup:
     params: Parameters
     options: dict = field(default_factory=dict)
     source: str = "<defaults>"
+
+
+def record_columns(setup: Setup, text=None) -> dict:
+    """Return the column mapping of a record: the setup's ``[measurement] columns``, overridden by ``--columns``.
+
+    Parameters
+    ----------
+    setup : Setup
+        The experiment's setup.
+    text : str, optional
+        ``--columns`` as typed (``current_A=I_arm,...``); a channel given here wins over the setup file.
+
+    Returns
+    -------
+    dict of str to str
+        Channel -> column name (with an optional unit).
+    """
+    from .tables import parse_columns
+
+    return {**setup.options.get("columns", {}), **parse_columns(text)}
 
 
 def load_setup(path=None) -> Setup:
@@ -538,6 +859,13 @@ def load_setup(path=None) -> Setup:
     for k in ("calibrate", "candidates"):
         if k in options and (not isinstance(options[k], list) or not all(isinstance(s, str) for s in options[k])):
             raise ConfigFileError(f"{path}: [measurement] {k} must be a list of names, e.g. [\"mu_c\", \"m_v\"]")
+    if "columns" in options:
+        from .tables import parse_columns
+
+        if not isinstance(options["columns"], dict):
+            raise ConfigFileError(f"{path}: [measurement] columns must be a table, e.g. "
+                                  "columns = {current_A = \"I_arm\", speed_rpm = \"n_mot\"}")
+        options["columns"] = parse_columns(options["columns"], f"{path}: [measurement] columns")
     flat: dict[str, Any] = {}
     for key, value in raw.items():
         if isinstance(value, dict):
