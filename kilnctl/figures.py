@@ -1,13 +1,144 @@
-"""Writing figures: whole or not at all, in the format the file name asks for."""
+"""The figure style shared by every kilnctl figure, and writing figures whole.
+
+One place for what a reader should find the same in every figure: the
+colour of a measured trace, of a model, of a limit or a requirement; font
+sizes; how a record is named in a title (its file name, not its path); a
+caption under the axes that explains lines and shading a legend cannot.
+
+>>> record_name("/data/plant/2024-05-01 startup.csv")
+'2024-05-01 startup.csv'
+"""
 
 from __future__ import annotations
 
+import textwrap
 from pathlib import Path
 
 from .errors import KilnctlError
 from .files import atomic_path
 
-__all__ = ["save_figure"]
+__all__ = ["COLORS", "FONT", "save_figure", "record_name", "finish", "limit_line", "note_box"]
+
+#: colours by role, the same in every figure
+COLORS = {
+    "measured": "k",          # a measured trace
+    "model": "C0",            # the model as given / calibrated base / linear prediction (stick)
+    "model2": "C1",           # a second model condition (slip)
+    "final": "C3",            # the model after diagnosis / the nonlinear run / the optimized ramp
+    "baseline": "0.55",       # the reference case something is compared against
+    "reference": "k",         # a speed reference
+    "limit": "#d62728",       # a hard limit or requirement bound (current limit, zeta_min, wn_max)
+    "region": "#2ca02c",      # where a requirement is met
+    "violation": "#d62728",   # where a requirement is not met (shaded)
+    "threshold": "k",         # a decision threshold (dBIC, held-out gain)
+    "supported": "C2",        # a supported candidate
+    "rejected": "C7",         # a rejected candidate
+    "event": "0.5",           # an event marker (breakaway, limit reached)
+}
+
+#: font sizes [pt] by role
+FONT = {"suptitle": 11, "title": 9.5, "label": 9.5, "legend": 8, "note": 8.5, "caption": 8.5}
+
+
+def record_name(source) -> str:
+    """The name a figure or report gives a record: its file name, never its absolute path.
+
+    Parameters
+    ----------
+    source : str or path-like
+        The record's source (a path, or a name such as ``'synthetic'``).
+
+    Returns
+    -------
+    str
+    """
+    text = str(source)
+    return Path(text).name if ("/" in text or "\\" in text) else text
+
+
+def limit_line(ax, value: float, label: str, *, axis: str = "h", color=None, ls="--", lw=1.0):
+    """Draw a labelled horizontal (or vertical) line of a limit or requirement.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        Axes to draw on.
+    value : float
+        Where the line lies, in data units of the axis.
+    label : str
+        Legend text (say what it is and its value with unit).
+    axis : {'h', 'v'}, default 'h'
+        Horizontal (a y value) or vertical (an x value).
+    color : color, optional
+        Default: ``COLORS['limit']``.
+    ls : str, default '--'
+        Line style.
+    lw : float, default 1.0
+        Line width [pt].
+
+    Returns
+    -------
+    matplotlib.lines.Line2D
+    """
+    draw = ax.axhline if axis == "h" else ax.axvline
+    return draw(value, color=color or COLORS["limit"], ls=ls, lw=lw, label=label)
+
+
+def note_box(ax, text: str, *, loc: str = "upper left", fontsize: float | None = None):
+    """Put a short note in a white box inside the axes.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        Axes to annotate.
+    text : str
+        The note (may hold line breaks).
+    loc : {'upper left', 'upper right', 'lower left', 'lower right'}, default 'upper left'
+        Corner of the axes.
+    fontsize : float, optional
+        Font size [pt] (default ``FONT['note']``).
+
+    Returns
+    -------
+    matplotlib.text.Text
+    """
+    v, h = loc.split()
+    x = 0.02 if h == "left" else 0.98
+    y = 0.97 if v == "upper" else 0.03
+    return ax.text(x, y, text, transform=ax.transAxes, ha=h, va="top" if v == "upper" else "bottom",
+                   fontsize=fontsize or FONT["note"], zorder=10,
+                   bbox={"boxstyle": "round", "fc": "white", "ec": "0.6", "alpha": 0.92})
+
+
+def finish(fig, title: str | None = None, caption: str | None = None, *, width: int = 170):
+    """Give a figure its title and a caption below the axes, and lay it out.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure.
+    title : str, optional
+        Title above all axes (name the record by :func:`record_name`).
+    caption : str, optional
+        What the lines, shading and markers mean, where a legend cannot say
+        it; wrapped to ``width`` characters.
+    width : int, default 170
+        Caption line length [characters].
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The same figure.
+    """
+    bottom = 0.0
+    if title:  # tight_layout leaves room for the suptitle itself
+        fig.suptitle(title, fontsize=FONT["suptitle"])
+    if caption:
+        lines = textwrap.wrap(caption, width)
+        fig.text(0.01, 0.005, "\n".join(lines), ha="left", va="bottom", fontsize=FONT["caption"], color="0.2")
+        bottom = (0.18 * len(lines) + 0.08) / fig.get_figheight()
+    fig.tight_layout(rect=(0, bottom, 1, 1))
+    return fig
 
 
 def save_figure(fig, path, **kwargs) -> Path:

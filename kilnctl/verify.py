@@ -118,37 +118,54 @@ class Verification:
     def plot(self, fig=None):
         """Speed and current: linear stick/slip predictions and the nonlinear run.
 
+        Parameters
+        ----------
+        fig : matplotlib.figure.Figure, optional
+            Figure to draw into (a new one by default).
+
         Returns
         -------
         matplotlib.figure.Figure
         """
         import matplotlib.pyplot as plt
 
-        fig = fig or plt.figure(figsize=(10, 7))
+        from .figures import COLORS, finish
+
+        fig = fig or plt.figure(figsize=(10, 7.4))
         ax1, ax2 = fig.subplots(2, 1, sharex=True)
         r = self.nonlinear
-        for cond, ls in (("stick", "--"), ("slip", ":")):
+        # stick and slip predictions lie almost on each other: stick wide and pale, slip thin on top
+        styles = {"stick": {"color": COLORS["model"], "lw": 3.5, "alpha": 0.45, "ls": "-"},
+                  "slip": {"color": COLORS["model2"], "lw": 1.2, "alpha": 1.0, "ls": "--"}}
+        for cond in ("stick", "slip"):
             lin = self.linear[cond]
-            ax1.plot(lin["t"], lin["speed_rpm"], ls=ls, color="C0", label=f"linear, {cond} inertia")
-            ax2.plot(lin["t"], lin["i_a"], ls=ls, color="C0", label=f"linear, {cond} inertia (no load)")
-        ax1.plot(r.t, r["speed_rpm"], color="C3", lw=1.2, label=f"nonlinear {r.model} model")
-        ax2.plot(r.t, r["i_a"], color="C3", lw=1.2, label=f"nonlinear {r.model} model")
-        ax1.plot(r.t, r["speed_ref_rpm"], color="k", lw=0.7, label="reference")
+            ax1.plot(lin["t"], lin["speed_rpm"], **styles[cond], label=f"linear, {cond} inertia")
+            ax2.plot(lin["t"], lin["i_a"], **styles[cond], label=f"linear, {cond} inertia (no load torque)")
+        ax1.plot(r.t, r["speed_ref_rpm"], color=COLORS["reference"], lw=0.8, label="speed reference")
+        ax1.plot(r.t, r["speed_rpm"], color=COLORS["final"], lw=1.2, label=f"nonlinear {r.model} model")
+        ax2.plot(r.t, r["i_a"], color=COLORS["final"], lw=1.2, label=f"nonlinear {r.model} model")
+        kinds = {}
         for e in r.events:
             if e.component in ("burden", "current_limit", "voltage_limit") and e.kind != "sliding_mode":
-                for ax in (ax1, ax2):
-                    ax.axvline(e.t, color="0.6", lw=0.6)
-                ax2.annotate(f"{e.kind}", (e.t, ax2.get_ylim()[1]), fontsize=7, rotation=90, va="top",
-                             ha="right", color="0.4")
+                kinds.setdefault((e.component, e.kind), []).append(e.t)
+        for n, ((comp, kind), times) in enumerate(kinds.items()):
+            ls = (":", "-.", (0, (5, 2, 1, 2)))[n % 3]
+            lab = f"{comp.replace('_', ' ')} {kind.replace('_', ' ')} at " + ", ".join(f"{t:.1f}" for t in times) + " s"
+            for ax in (ax1, ax2):
+                for k, t in enumerate(times):
+                    ax.axvline(t, color=COLORS["event"], lw=0.9, ls=ls, label=lab if k == 0 else None)
         ax1.set_ylabel("motor speed [rpm]")
         ax2.set_ylabel("armature current [A]")
         ax2.set_xlabel("time [s]")
+        ax1.set_title("speed", fontsize=10)
+        ax2.set_title("current: the linear model carries no load torque, so it predicts only the "
+                      "accelerating current", fontsize=10)
         for ax in (ax1, ax2):
             ax.grid(True, alpha=0.3)
             ax.legend(loc="lower right", fontsize=8)
-        fig.suptitle("Design verified on the nonlinear plant: grey lines mark burden and limit events")
-        fig.tight_layout()
-        return fig
+        g = self.params
+        return finish(fig, f"Design verified on the nonlinear {r.model} model (k_p = {g.k_p:.4g} V/rpm, "
+                           f"k_I = {g.k_I:.4g} V/(rpm·s), k_D = {g.k_D:.4g} V·s/rpm)")
 
 
 def _linear_run(params, gains, condition, t):
@@ -193,9 +210,10 @@ def verify(params: Parameters | None = None, model: str = "macro", t_end: float 
     reasons = []
     load = figs["final_current_A"] - linear["stick"]["figures"]["final_current_A"]
     reasons.append(
-        f"current: the linear model carries no load torque (T_l = 0); the nonlinear final current is "
-        f"{figs['final_current_A']:.0f} A, of which {load:.0f} A holds the burden and bearing friction "
-        f"({load * params.k_i * params.n / 1e6:.2f} MN*m at the kiln)")
+        f"current: the linear model carries no load torque (T_l = 0) and ends at "
+        f"{linear['stick']['figures']['final_current_A']:.0f} A; the nonlinear plant ends at "
+        f"{figs['final_current_A']:.0f} A, and the difference, {load:.0f} A, holds the burden and bearing "
+        f"friction ({load * params.k_i * params.n / 1e6:.2f} MN*m at the kiln)")
     brk = [e for e in nl.events if e.component == "burden" and e.kind == "breakaway"]
     if brk:
         reasons.append(

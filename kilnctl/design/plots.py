@@ -11,14 +11,14 @@ import math
 
 import numpy as np
 
-from ..figures import save_figure
+from ..figures import COLORS, note_box, save_figure
 
 __all__ = ["plot_root_locus", "plot_step_responses", "plot_parameter_locus", "plot_design", "save_figure"]
 
 #: line style and colour of each load condition
 STYLE = {"stick": {"color": "C0", "ls": "-"}, "slip": {"color": "C1", "ls": "--"}}
-_REGION = "#2ca02c"
-_LIMIT = "#d62728"
+_REGION = COLORS["region"]
+_LIMIT = COLORS["limit"]
 
 
 def _plt():
@@ -139,10 +139,11 @@ def plot_root_locus(data, axes=None):
                             fontsize=8.5,
                             bbox={"boxstyle": "round", "fc": "white", "ec": "0.6", "alpha": 0.9},
                             arrowprops={"arrowstyle": "-", "color": "0.5"})
-    ax_full.set_title(f"Root locus of $1 + \\kappa K C(s) G(s)$; $\\kappa$ = 1: $k_p$ = {g.k_p:.4g}, "
-                      f"$k_I$ = {g.k_I:.4g}, $k_D$ = {g.k_D:.4g}", fontsize=10)
-    ax_zoom.set_title("zoom: dominant pole and design region\n(interactive backends: click a locus for its gain)",
-                      fontsize=10)
+    ax_full.set_title(f"Root locus of $1 + \\kappa K C(s) G(s)$; $\\kappa$ = 1: $k_p$ = {g.k_p:.4g} V/rpm, "
+                      f"$k_I$ = {g.k_I:.4g} V/(rpm·s), $k_D$ = {g.k_D:.4g} V·s/rpm", fontsize=10)
+    ax_zoom.set_title("zoom: dominant pole and design region", fontsize=10)
+    if req is not None:
+        note_box(ax_zoom, _margin_text(data), loc="lower left")
     handles, labels = ax_full.get_legend_handles_labels()
     ax_zoom.legend(handles, labels, loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=8.5, framealpha=0.95,
                    borderaxespad=0.0)
@@ -150,6 +151,26 @@ def plot_root_locus(data, axes=None):
         fig.tight_layout()
     _connect_click(fig, data, (ax_full, ax_zoom))
     return fig
+
+
+def _margin_text(data) -> str:
+    """The design's margins to the damping and frequency limits, per condition."""
+    req = data.requirements
+    lines = ["margins to the requirements:"]
+    for cond, br in data.branches.items():
+        p = br.chosen
+        zeta = float(np.min(-p.real / np.maximum(np.abs(p), 1e-300)))
+        dom = p[np.argmax(p.real)]
+        wn = float(abs(dom))
+        dz = zeta - req.zeta_min
+        dw = req.wn_max - wn
+        dz = 0.0 if abs(dz) < 5e-4 else dz  # no "-0.000"
+        dw = 0.0 if abs(dw) < 5e-3 else dw
+        on = [n for n, d in (("$\\zeta$", dz), ("$\\omega_n$", dw)) if d == 0.0]
+        lines.append(f"{cond}: min $\\zeta$ {zeta:.3f} (limit {req.zeta_min:g}, margin {dz:.3f}); "
+                     f"dominant $\\omega_n$ {wn:.2f} rad/s (limit {req.wn_max:.2f}, margin {dw:.2f})"
+                     + (f": on the {' and '.join(on)} limit" if on else ""))
+    return "\n".join(lines)
 
 
 def click_text(data, s0: complex) -> str:
@@ -193,6 +214,9 @@ def _connect_click(fig, data, axes) -> None:
 
     fig._kilnctl_click = on_click  # keep a strong reference for the callback registry
     fig.canvas.mpl_connect("button_press_event", on_click)
+    manager = getattr(fig.canvas, "manager", None)
+    if manager is not None:  # the hint shows in an interactive window's title, never in a saved file
+        manager.set_window_title("kilnctl root locus: click a locus for its gain")
 
 
 # --- step responses ------------------------------------------------------------------
@@ -334,15 +358,33 @@ def plot_parameter_locus(data, axes=None):
         ax_p.axhline(req.zeta_min, color=_LIMIT, lw=1, ls="--", label=f"$\\zeta_{{min}}$ = {req.zeta_min:g}")
     ax_d.set_ylabel("dominant pole $\\omega_n$ [rad/s]")
     ax_d.set_title("Dominant (slowest) pole", fontsize=10)
+    # from zero: the dominant pole hardly moves, and the axis must not make a 0.2 % change look large
+    wn_all = np.concatenate([data.dominant_wn(c) for c in data.poles])
+    ax_d.set_ylim(0, 1.3 * max(float(wn_all.max()), req.wn_max if req is not None else 0.0))
+    spread = 100 * 0.5 * np.ptp(wn_all) / float(np.mean(wn_all))
+    note_box(ax_d, f"$\\omega_n$ = {wn_all.min():.2f} to {wn_all.max():.2f} rad/s over this range "
+                   f"($\\pm${spread:.1f} %)", loc="upper left")
     ax_d.legend(fontsize=8, loc="lower right")
     ax_p.set_ylabel("damping ratio of the electromechanical pair [-]")
     ax_p.set_title("Damping of the electromechanical pair", fontsize=10)
-    ax_p.legend(fontsize=8, loc="lower left")
-    for ax in (ax_d, ax_p):  # keep small changes readable, but never zoom below +-2 % of the value
-        lo, hi = ax.get_ylim()
-        mid, half = 0.5 * (lo + hi), 0.5 * (hi - lo)
-        half = max(half, 0.04 * abs(mid))
-        ax.set_ylim(mid - half, mid + half)
+    # damping: zoomed (the question is where it crosses the limit), never closer than +-0.03 about the limit
+    z_all = np.concatenate([data.pair_zeta(c) for c in data.poles])
+    ref = req.zeta_min if req is not None else float(np.mean(z_all))
+    half = max(0.03, 1.3 * float(np.max(np.abs(z_all - ref))))
+    ax_p.set_ylim(ref - half, ref + half)
+    if req is not None:
+        ax_p.axhspan(ref - half, req.zeta_min, color=COLORS["violation"], alpha=0.08, lw=0,
+                     label=f"$\\zeta < {req.zeta_min:g}$: requirement not met")
+        for cond in data.poles:
+            bad = data.pair_zeta(cond) < req.zeta_min
+            if bad.any():
+                lo_x, hi_x = x[bad].min(), x[bad].max()
+                unit = xlabel.split("[")[-1].rstrip("]")
+                ax_p.annotate(f"{cond}: below {req.zeta_min:g}\nfor {name} {lo_x:.0f} to {hi_x:.0f} {unit}",
+                              xy=(x[bad][len(x[bad]) // 2], data.pair_zeta(cond)[bad][len(x[bad]) // 2]),
+                              xytext=(0, -38), textcoords="offset points", ha="center", fontsize=8,
+                              color=COLORS["violation"], arrowprops={"arrowstyle": "->", "color": COLORS["violation"]})
+    ax_p.legend(fontsize=8, loc="upper right")
     fig.suptitle(f"Closed-loop poles over {name} at fixed gains ({data.gains})", fontsize=11)
     fig.tight_layout()
     return fig

@@ -200,57 +200,72 @@ class Comparison:
         """
         from matplotlib.figure import Figure
 
+        from ..figures import COLORS, finish, record_name
+
         if fig is None:
-            fig = Figure(figsize=(13, 3.2 * len(self.channels)))
+            fig = Figure(figsize=(13, 3.3 * len(self.channels) + 0.9))
         axes = fig.subplots(len(self.channels), 4, squeeze=False,
                             gridspec_kw={"width_ratios": [3, 3, 2, 2]})
+        c_mod, c_ext = COLORS["model"], COLORS["final"]
+        names = {"current_A": "current", "speed_rpm": "speed"}
         for row, (k, c) in enumerate(self.channels.items()):
             a0, a1, a2, a3 = axes[row]
-            a0.plot(self.t, c.measured, color="k", lw=0.8, label="measured")
-            a0.plot(self.t, c.model, color="C0", lw=1.2, label=labels[0])
-            a1.plot(self.t, c.residual, color="C0", lw=0.8, label=labels[0])
+            q = names.get(k, k)
+            a0.plot(self.t, c.measured, color=COLORS["measured"], lw=0.8, label="measured")
+            a0.plot(self.t, c.model, color=c_mod, lw=1.2, label=labels[0])
+            a1.plot(self.t, c.residual, color=c_mod, lw=0.8, label=labels[0])
             if compare_with is not None:
                 o = compare_with.channels[k]
-                a0.plot(compare_with.t, o.model, color="C3", lw=1.2, ls="--", label=labels[1])
-                a1.plot(compare_with.t, o.residual, color="C3", lw=0.8, alpha=0.8, label=labels[1])
-            for f in c.failing:
+                a0.plot(compare_with.t, o.model, color=c_ext, lw=1.2, ls="--", label=labels[1])
+                a1.plot(compare_with.t, o.residual, color=c_ext, lw=0.8, alpha=0.8, label=labels[1])
+            for n, f in enumerate(c.failing):
                 for ax in (a0, a1):
-                    ax.axvspan(f["t_start"], f["t_end"], color="C3", alpha=0.12, lw=0)
-            a1.axhline(3 * c.sigma, color="gray", ls=":", lw=0.8)
-            a1.axhline(-3 * c.sigma, color="gray", ls=":", lw=0.8)
-            a0.set_ylabel(f"{k} [{c.unit}]")
-            a0.set_title(f"{k}: fit {c.fit:.1f} %" + (f" -> {compare_with.channels[k].fit:.1f} %"
+                    ax.axvspan(f["t_start"], f["t_end"], color=COLORS["violation"], alpha=0.12, lw=0,
+                               label=f"|residual| > 3$\\sigma$ ({labels[0]})" if n == 0 and ax is a1 else None)
+            a1.axhline(3 * c.sigma, color="gray", ls=":", lw=0.9, label=f"$\\pm 3\\sigma$ = {3 * c.sigma:.3g} {c.unit}")
+            a1.axhline(-3 * c.sigma, color="gray", ls=":", lw=0.9)
+            a0.set_ylabel(f"{q} [{c.unit}]")
+            a1.set_ylabel(f"residual [{c.unit}]")
+            a0.set_title(f"{q}: fit {c.fit:.1f} %" + (f" -> {compare_with.channels[k].fit:.1f} %"
                                                         if compare_with is not None else ""), fontsize=9)
-            a1.set_title("residual (measured - model), 3 sigma dotted", fontsize=9)
+            a1.set_title(f"{q} residual (measured - model)", fontsize=9)
             w = c.whiteness
             lag_s = w["lags"] * self.dt
-            a2.bar(lag_s[1:], w["r"][1:], width=self.dt, color="C0")
+            a2.bar(lag_s[1:], w["r"][1:], width=self.dt, color=c_mod, label=labels[0])
             if compare_with is not None:
                 w2 = compare_with.channels[k].whiteness
-                a2.plot(w2["lags"][1:] * compare_with.dt, w2["r"][1:], color="C3", lw=1.0)
-            a2.axhspan(-w["band"], w["band"], color="gray", alpha=0.2)
+                a2.plot(w2["lags"][1:] * compare_with.dt, w2["r"][1:], color=c_ext, lw=1.0, label=labels[1])
+            a2.axhspan(-w["band"], w["band"], color="gray", alpha=0.2, label="99 % band of white noise")
             a2.set_title(f"residual autocorrelation ({w['n_outside']} lags out)", fontsize=9)
-            a2.set_xlabel("lag [s]")
+            a2.set_ylabel("autocorrelation [-]")
             s = c.spectrum
-            a3.semilogy(s["f"][1:], s["psd"][1:], color="C0")
+            a3.semilogy(s["f"][1:], s["psd"][1:], color=c_mod, label=labels[0])
             if compare_with is not None:
                 s2 = compare_with.channels[k].spectrum
-                a3.semilogy(s2["f"][1:], s2["psd"][1:], color="C3", ls="--")
-            a3.axvline(s["dominant_hz"], color="gray", ls=":")
-            a3.set_title(f"residual spectrum, peak {s['dominant_hz']:.2f} Hz", fontsize=9)
-            a3.set_xlabel("frequency [Hz]")
-            for ax in (a0, a1):
-                for ph in self.phases[1:]:
-                    ax.axvline(ph["t_start"], color="gray", lw=0.6, ls="--")
+                a3.semilogy(s2["f"][1:], s2["psd"][1:], color=c_ext, ls="--", label=labels[1])
+            a3.axvline(s["dominant_hz"], color="gray", ls=":", label=f"peak {s['dominant_hz']:.2f} Hz")
+            a3.set_title("residual spectrum", fontsize=9)
+            a3.set_ylabel(f"PSD [{c.unit}$^2$/Hz]")
+            for n, ax in enumerate((a0, a1)):
+                for m, ph in enumerate(self.phases[1:]):
+                    ax.axvline(ph["t_start"], color="gray", lw=0.6, ls="--",
+                               label="phase boundary" if m == 0 and n == 0 and row == 0 else None)
                 ax.grid(True, alpha=0.3)
             if row == 0:
-                a0.legend(fontsize=8, loc="best")
-        for ax in axes[-1][:2]:
-            ax.set_xlabel("time [s]")
-        fig.suptitle(f"{self.source}: measured vs {self.model} model"
-                     + (f" + {', '.join(self.effects)}" if self.effects else ""), fontsize=10)
-        fig.tight_layout()
-        return fig
+                a0.legend(fontsize=7.5, loc="best")
+                a1.legend(fontsize=7.5, loc="best")
+                a2.legend(fontsize=7.5, loc="upper right")
+                a3.legend(fontsize=7.5, loc="upper right")
+        for row in axes:
+            for ax, lab in zip(row, ("time [s]", "time [s]", "lag [s]", "frequency [Hz]")):
+                ax.set_xlabel(lab, fontsize=8.5)
+        phases = ", ".join(f"{ph['name']} from {ph['t_start']:.1f} s" for ph in self.phases)
+        caption = (f"Dashed vertical lines: start-up phases ({phases}). Red shading: intervals where the "
+                   f"{labels[0]}'s |residual| exceeds 3 sigma (robust sigma of its residual). A white residual "
+                   "(nothing left to explain) keeps its autocorrelation inside the grey band and has a flat "
+                   "spectrum.")
+        return finish(fig, f"{record_name(self.source)}: measured vs {self.model} model"
+                      + (f" + {', '.join(self.effects)}" if self.effects else ""), caption)
 
 
 def _phases(run: ModelRun, t0: float, t_last: float) -> list:

@@ -361,41 +361,56 @@ def plot_ranking(d, fig=None):
     matplotlib.figure.Figure
     """
     from matplotlib.figure import Figure
+    from matplotlib.patches import Patch
 
-    fig = fig or Figure(figsize=(13, 3.6))
-    a0, a1, a2 = fig.subplots(1, 3, gridspec_kw={"width_ratios": [3, 3, 2]})
+    from ..figures import COLORS, finish, record_name
+
     rk = d.ranking_
+    fig = fig or Figure(figsize=(13, 2.2 + 0.3 * max(len(rk), 4)))
+    a0, a1, a2 = fig.subplots(1, 3, gridspec_kw={"width_ratios": [3, 3, 2]})
     names = [r.effect for r in rk]
-    colors = ["C2" if r.supported else "C7" for r in rk]
+    colors = [COLORS["supported"] if r.supported else COLORS["rejected"] for r in rk]
     y = np.arange(len(rk))
     dbic = [max(-1e6, r.delta_bic) if math.isfinite(r.delta_bic) else 0 for r in rk]
     a0.barh(y, [-v for v in dbic], color=colors)
     a0.set_xscale("symlog", linthresh=10)
-    a0.axvline(d.min_delta_bic, color="k", ls=":")
+    a0.axvline(d.min_delta_bic, color=COLORS["threshold"], ls=":", label=f"threshold {d.min_delta_bic:g}")
+    a0.axvline(0, color="0.3", lw=0.6)
     a0.set_yticks(y, names, fontsize=8)
     a0.invert_yaxis()
-    a0.set_title("-dBIC (fitting part), threshold dotted", fontsize=9)
-    a1.barh(y, [max(-100.0, r.holdout_gain) if math.isfinite(r.holdout_gain) else 0 for r in rk], color=colors)
-    a1.set_xlim(-105, 105)
-    a1.axvline(d.min_holdout_gain, color="k", ls=":")
+    a0.set_xlabel("BIC improvement -dBIC on the fitting part [-] (log scale beyond 10)")
+    a0.set_title("evidence in the fitted part (more is better)", fontsize=9)
+    a0.legend(handles=[Patch(color=COLORS["supported"], label="supported (both tests)"),
+                       Patch(color=COLORS["rejected"], label="not supported"),
+                       *a0.get_legend_handles_labels()[0]], fontsize=7.5, loc="lower right")
+    gains = [r.holdout_gain if math.isfinite(r.holdout_gain) else 0 for r in rk]
+    a1.barh(y, [max(-100.0, g) for g in gains], color=colors)
+    lim = min(105.0, max(10.0, 1.15 * max([abs(g) for g in gains] + [d.min_holdout_gain])))
+    a1.set_xlim(-lim, lim)
+    for yy, g in zip(y, gains):
+        if g < -lim:
+            a1.text(-lim, yy, f" {g:.0f} %", va="center", ha="left", fontsize=7)
+    a1.axvline(d.min_holdout_gain, color=COLORS["threshold"], ls=":", label=f"threshold {d.min_holdout_gain:g} %")
+    a1.axvline(0, color="0.3", lw=0.6)
     a1.set_yticks(y, [""] * len(y))
     a1.invert_yaxis()
-    a1.set_title("held-out gain [%] (cut at -100), threshold dotted", fontsize=9)
+    a1.set_xlabel("held-out gain [%]: error reduction on samples not fitted")
+    a1.set_title("prediction of unseen samples (more is better)", fontsize=9)
+    a1.legend(fontsize=7.5, loc="lower right")
     chans = list(d.baseline_)
     x = np.arange(len(chans))
-    a2.bar(x - 0.2, [d.baseline_[c] for c in chans], 0.4, label="calibrated base", color="C0")
-    a2.bar(x + 0.2, [d.final_[c] for c in chans], 0.4, label="final", color="C3")
+    a2.bar(x - 0.2, [d.baseline_[c] for c in chans], 0.4, label="calibrated base", color=COLORS["model"])
+    a2.bar(x + 0.2, [d.final_[c] for c in chans], 0.4, label="final", color=COLORS["final"])
     for i, c in enumerate(chans):
         a2.text(i - 0.2, d.baseline_[c], f"{d.baseline_[c]:.1f}", ha="center", va="bottom", fontsize=8)
         a2.text(i + 0.2, d.final_[c], f"{d.final_[c]:.1f}", ha="center", va="bottom", fontsize=8)
-    a2.set_xticks(x, chans)
-    lo = min(min(d.baseline_.values()), min(d.final_.values()))
-    a2.set_ylim(max(0.0, lo - 10), 102)
-    a2.set_title("fit % before and after", fontsize=9)
-    a2.legend(fontsize=8, loc="lower right")
-    fig.suptitle(diagnosis_headline(d), fontsize=10)
-    fig.tight_layout()
-    return fig
+    a2.set_xticks(x, [{"current_A": "current", "speed_rpm": "speed"}.get(c, c) for c in chans])
+    a2.set_ylim(0, 135)  # from zero: fit % bars are read by their length
+    a2.set_yticks(range(0, 101, 20))
+    a2.set_ylabel("fit [%] (100 = perfect)")
+    a2.set_title("fit on the whole record", fontsize=9)
+    a2.legend(fontsize=7.5, loc="upper center", ncol=2)
+    return finish(fig, f"{record_name(d.measurement_.source)}: {diagnosis_headline(d)}")
 
 
 def diagnosis_html(d, figs=None) -> str:

@@ -9,6 +9,10 @@ import numpy as np
 from .problem import RampProblem
 from .verify import StartupMeasures
 
+#: the objectives in a few words, for reports
+OBJECTIVE_WORDS = {"peak": "the highest tooth stress, running load included",
+                   "dynamic": "the start-up stress above the running load"}
+
 __all__ = ["RampResult", "StageLog"]
 
 
@@ -218,19 +222,22 @@ class RampResult:
         dyn_red = None if s["baseline_dynamic_stress_Pa"] is None else \
             100.0 * (1 - s["dynamic_stress_verified_Pa"] / s["baseline_dynamic_stress_Pa"])
         mpa = lambda v: "-" if v is None else f"{v / 1e6:8.2f}"  # noqa: E731
-        lines = [f"start-up ramp, profile {s['profile']}, objective '{s['objective']}', "
-                 f"95 % speed by t_max = {prob.t_max:g} s ({'robust, ' + str(len(self.predicted)) + ' cases' if prob.robust else 'nominal'})",
+        rows = {"peak": f"  {'peak bending stress [MPa]':34s}{mpa(s['peak_stress_predicted_Pa']):>10s}"
+                        f"{mpa(s['peak_stress_verified_Pa']):>10s}{mpa(s['baseline_peak_stress_Pa']):>10s}",
+                "dynamic": f"  {'peak dynamic stress [MPa]':34s}{mpa(s['dynamic_stress_predicted_Pa']):>10s}"
+                           f"{mpa(s['dynamic_stress_verified_Pa']):>10s}{mpa(s['baseline_dynamic_stress_Pa']):>10s}"}
+        order = ("dynamic", "peak") if s["objective"] == "dynamic" else ("peak", "dynamic")
+        lines = [f"start-up ramp, profile {s['profile']}, objective '{s['objective']}' "
+                 f"({OBJECTIVE_WORDS[s['objective']]}), 95 % speed by t_max = {prob.t_max:g} s "
+                 f"({'robust, ' + str(len(self.predicted)) + ' cases' if prob.robust else 'nominal'})",
                  f"  ramp: {_ramp_text(s['ramp'])}",
                  f"  {'':34s}{'predicted':>10s}{'verified':>10s}{'baseline':>10s}",
-                 f"  {'peak bending stress [MPa]':34s}{mpa(s['peak_stress_predicted_Pa']):>10s}"
-                 f"{mpa(s['peak_stress_verified_Pa']):>10s}{mpa(s['baseline_peak_stress_Pa']):>10s}",
-                 f"  {'peak dynamic stress [MPa]':34s}{mpa(s['dynamic_stress_predicted_Pa']):>10s}"
-                 f"{mpa(s['dynamic_stress_verified_Pa']):>10s}{mpa(s['baseline_dynamic_stress_Pa']):>10s}"]
+                 *(rows[k] for k in order)]
         if s["reduction_pct"] is not None:
-            def rel(x):
-                return f"{abs(x):.1f} % {'below' if x >= -0.05 else 'above'}"
-            lines.append(f"  against the baseline ramp {s['baseline_ramp']:g} rpm/s: peak stress {rel(s['reduction_pct'])}, "
-                         f"dynamic stress {rel(dyn_red)}")
+            changes = {"peak": f"peak stress {_change(s['reduction_pct'])}",
+                       "dynamic": f"dynamic stress {_change(dyn_red)}"}
+            lines.append(f"  against the baseline ramp {s['baseline_ramp']:g} rpm/s: "
+                         + ", ".join(changes[k] for k in order))
         if s["running_stress_Pa"] is not None:
             lines.append(f"  running load (burden at its angle): {s['running_stress_Pa'] / 1e6:.2f} MPa")
         tts = s["time_to_speed_s"]
@@ -244,6 +251,31 @@ class RampResult:
         for n in self.notes:
             lines.append(f"  note: {n}")
         return "\n".join(lines)
+
+    def headline(self) -> str:
+        """One plain sentence: what the ramp changes in the objective, and what no ramp changes.
+
+        Returns
+        -------
+        str
+        """
+        s = self.summary()
+        rate = s["baseline_ramp"]
+        mpa = lambda v: f"{v / 1e6:.1f} MPa"  # noqa: E731
+        if s["dynamic_stress_verified_Pa"] is None or s["baseline_dynamic_stress_Pa"] is None:
+            return f"{s['profile']} ramp found ({s['solver_status']}), not verified on the hybrid plant"
+        dyn = 100.0 * (1 - s["dynamic_stress_verified_Pa"] / s["baseline_dynamic_stress_Pa"])
+        peak = s["reduction_pct"]
+        dyn_text = (f"start-up (dynamic) stress {mpa(s['dynamic_stress_verified_Pa'])} against "
+                    f"{mpa(s['baseline_dynamic_stress_Pa'])} with the {rate:g} rpm/s ramp ({_change(dyn)})")
+        if abs(peak) < 0.05:
+            peak_text = (f"the peak stress, {mpa(s['peak_stress_verified_Pa'])}, is the same with both ramps: "
+                         "it is the running load of the burden, which no ramp changes")
+        else:
+            peak_text = (f"peak stress {mpa(s['peak_stress_verified_Pa'])} against "
+                         f"{mpa(s['baseline_peak_stress_Pa'])} ({_change(peak)})")
+        first, second = (dyn_text, peak_text) if self.objective_kind == "dynamic" else (peak_text, dyn_text)
+        return f"{_profile_name(s['profile'])} ramp: {first}; {second}"
 
     def plot(self, fig=None):
         """Draw reference, bending stress and current: optimum against the baseline.
@@ -259,40 +291,64 @@ class RampResult:
         """
         import matplotlib.pyplot as plt
 
+        from ..figures import COLORS, finish, limit_line
+
         if fig is None:
-            fig = plt.figure(figsize=(10, 8))
+            fig = plt.figure(figsize=(10, 8.5))
         ax = fig.subplots(3, 1, sharex=True)
         hyb, base, sm = self.traces.get("hybrid"), self.traces.get("baseline"), self.traces.get("smooth")
-        rate = self.problem.params.ramp_rate
+        prob = self.problem
+        rate = prob.params.ramp_rate
         if base is not None:
-            ax[0].plot(base.t, base.outputs["speed_ref_rpm"], "k--", lw=1, label=f"baseline reference ({rate:g} rpm/s)")
-            ax[1].plot(base.t, base.outputs["sigma"] / 1e6, color="0.55", lw=1, label="baseline, hybrid plant")
-            ax[2].plot(base.t, base.outputs["i_a"], color="0.55", lw=1, label="baseline")
+            ax[0].plot(base.t, base.outputs["speed_ref_rpm"], color=COLORS["reference"], ls="--", lw=1,
+                       label=f"baseline reference ({rate:g} rpm/s)")
+            ax[1].plot(base.t, base.outputs["sigma"] / 1e6, color=COLORS["baseline"], lw=1,
+                       label=f"baseline ramp {rate:g} rpm/s, hybrid plant")
+            ax[2].plot(base.t, base.outputs["i_a"], color=COLORS["baseline"], lw=1, label=f"baseline ramp {rate:g} rpm/s")
         if hyb is not None:
-            ax[0].plot(hyb.t, hyb.outputs["speed_ref_rpm"], color="C0", label="optimized reference")
-            ax[0].plot(hyb.t, hyb.outputs["speed_rpm"], color="C1", lw=1, label="motor speed (optimized)")
-            ax[1].plot(hyb.t, hyb.outputs["sigma"] / 1e6, color="C3", lw=1.2, label="optimized, hybrid plant")
-            ax[2].plot(hyb.t, hyb.outputs["i_a"], color="C3", lw=1.2, label="optimized")
+            ax[0].plot(hyb.t, hyb.outputs["speed_ref_rpm"], color=COLORS["model"], label="optimized reference")
+            ax[0].plot(hyb.t, hyb.outputs["speed_rpm"], color=COLORS["model2"], lw=1, label="motor speed (optimized)")
+            ax[1].plot(hyb.t, hyb.outputs["sigma"] / 1e6, color=COLORS["final"], lw=1.2,
+                       label="optimized ramp, hybrid plant")
+            ax[2].plot(hyb.t, hyb.outputs["i_a"], color=COLORS["final"], lw=1.2, label="optimized ramp")
         if sm is not None:
-            ax[1].plot(sm["t"], sm["sigma"] / 1e6, color="C0", ls=":", lw=1.2, label="optimized, smooth model")
-        ax[0].axvline(self.problem.t_max, color="k", lw=0.8, ls=":")
-        ax[0].axhline(self.problem.speed_fraction * self.problem.params.omega_ref, color="k", lw=0.5, ls=":")
+            ax[1].plot(sm["t"], sm["sigma"] / 1e6, color=COLORS["model"], ls=":", lw=1.2,
+                       label="optimized ramp, smooth model (prediction)")
+        target = prob.speed_fraction * prob.params.omega_ref
+        limit_line(ax[0], prob.t_max, f"t_max = {prob.t_max:g} s: the speed must reach...", axis="v",
+                   color="k", ls=":", lw=0.9)
+        limit_line(ax[0], target, f"...{100 * prob.speed_fraction:g} % of the set point ({target:.0f} rpm) by then",
+                   color="k", ls=":", lw=0.6)
+        s = self.summary()
+        if s["running_stress_Pa"] is not None:
+            limit_line(ax[1], s["running_stress_Pa"] / 1e6, f"running load of the burden "
+                       f"({s['running_stress_Pa'] / 1e6:.1f} MPa): no ramp changes it", color="0.3", ls="-.", lw=0.8)
+        limit_line(ax[2], prob.params.I_max, f"current limit I_max = {prob.params.I_max:g} A")
         ax[0].set_ylabel("speed [rpm]")
         ax[1].set_ylabel("tooth bending stress [MPa]")
-        ax[2].axhline(self.problem.params.I_max, color="k", lw=0.8, ls="--")
         ax[2].set_ylabel("armature current [A]")
         ax[2].set_xlabel("time [s]")
+        ax[2].set_ylim(0, 1.1 * prob.params.I_max)
         for a in ax:
             a.grid(True, alpha=0.3)
             a.legend(loc="lower right", fontsize=8)
-        s = self.summary()
-        ttl = f"profile {s['profile']}: peak stress {s['peak_stress_verified_Pa'] / 1e6:.1f} MPa verified" \
-            if s["peak_stress_verified_Pa"] is not None else f"profile {s['profile']}"
-        if s["baseline_peak_stress_Pa"] is not None:
-            ttl += f" vs {s['baseline_peak_stress_Pa'] / 1e6:.1f} MPa at {rate:g} rpm/s"
-        fig.suptitle(ttl)
-        fig.tight_layout()
-        return fig
+        ax[1].set_title("the spikes are backlash impacts as the pinion takes up the gap; "
+                        "dynamic stress = stress minus the running load", fontsize=9)
+        return finish(fig, self.headline().replace("; ", ";\n", 1), width=150)
+
+
+def _profile_name(label: str) -> str:
+    """'S-curve', 'constant-rate', '3-segment' for the profile labels 'scurve', 'constant', 'pwl:3'."""
+    if label.startswith("pwl:"):
+        return f"{label[4:]}-segment"
+    return {"scurve": "S-curve", "constant": "constant-rate"}.get(label, label)
+
+
+def _change(pct: float) -> str:
+    """'46.7 % lower', '3.0 % higher', 'unchanged'."""
+    if abs(pct) < 0.05:
+        return "unchanged"
+    return f"{abs(pct):.1f} % {'lower' if pct > 0 else 'higher'}"
 
 
 def _ramp_text(d: dict) -> str:
