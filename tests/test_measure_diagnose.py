@@ -228,3 +228,16 @@ def test_every_periodic_catalogue_effect_says_what_else_makes_its_signature():
     for eff in CATALOGUE.values():
         if eff.period is not None:
             assert eff.short_record_note and not eff.short_record_note.endswith(".")
+
+
+def test_report_reads_without_statistics_and_loads_in_a_browser(second_motor_case, tmp_path, load_in_chromium):
+    _, _, d = second_motor_case
+    d.report(tmp_path / "page")
+    text = (tmp_path / "page" / "diagnose.html").read_text()
+    assert "± inf" not in text and "+- inf" not in text and "{'" not in text  # no infinities, no Python dicts
+    # truth: the diagnosis' own thresholds are the ones the how-to-read box explains
+    assert f"below −{d.min_delta_bic:g}" in text and f"more than {d.min_holdout_gain:g} %" in text
+    assert "Missing from the model: second motor" in text
+    out = load_in_chromium(tmp_path / "page" / "diagnose.html")
+    assert out["errors"] == [] and out["broken_images"] == [] and out["images"] == 2
+    assert out["page_width"] <= 1300

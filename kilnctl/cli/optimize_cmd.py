@@ -55,6 +55,8 @@ def register(sub) -> None:
     p.add_argument("--transcription", choices=("single_shooting", "multiple_shooting"), default="single_shooting",
                    help="how the dynamics enter the NLP (default single_shooting)")
     p.add_argument("--plot", metavar="FILE", help="write the comparison figure (format from the extension)")
+    p.add_argument("--report", metavar="DIR", help="write optimize_ramp.html (one page, figure embedded), "
+                   "optimize_ramp.json and optimize_ramp.png into DIR")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
     p.set_defaults(func=run)
 
@@ -106,16 +108,23 @@ def run(args) -> int:
 
         from ..figures import save_figure
 
-        save_figure(result.plot(fig=Figure(figsize=(10, 8))), args.plot)
+        save_figure(result.plot(fig=Figure(figsize=(10, 8.5))), args.plot)
+    if args.report:
+        from ..pages import write_ramp_report
+
+        write_ramp_report(result, args.report, protect=(args.config,))
     if args.json:
         out = result.summary()
         if price is not None:
             out["robustness"] = price.summary()
         print_json(out)
     else:
+        print(result.headline() + ".")
         print(result.table())
         if price is not None:
             print(price.table())
         if args.plot:
             print(f"  wrote plot  {args.plot}")
+        if args.report:
+            print(f"  wrote {args.report}/optimize_ramp.html, optimize_ramp.json, optimize_ramp.png")
     return 0 if result.ok else EXIT_FLAGGED

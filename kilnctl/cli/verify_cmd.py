@@ -27,6 +27,8 @@ def register(sub) -> None:
     p.add_argument("--model", choices=("macro", "micro"), default="macro", help="nonlinear model (default macro)")
     p.add_argument("--t-end", type=float, default=40.0, metavar="S", help="simulated time [s] (default 40)")
     p.add_argument("--plot", metavar="FILE", help="write the comparison figure (format from the extension)")
+    p.add_argument("--report", metavar="DIR", help="write verify.html (one page, figure embedded), verify.json and "
+                   "verify.png into DIR")
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
     p.set_defaults(func=run)
 
@@ -41,10 +43,16 @@ def run(args) -> int:
     v = verify(load_params(args), model=args.model, t_end=args.t_end)
     if args.plot:
         save_figure(v.plot(), args.plot)
+    if args.report:
+        from ..pages import write_verify_report
+
+        write_verify_report(v, args.report, protect=(args.config,))
     if args.json:
         print_json(v.to_dict())
     else:
         g = v.params
         print(f"gains: k_p = {g.k_p:.4g} V/rpm, k_I = {g.k_I:.4g} V/(rpm*s), k_D = {g.k_D:.4g} V*s/rpm")
         print(v)
+        if args.report:
+            print(f"wrote {args.report}/verify.html, verify.json, verify.png")
     return 0

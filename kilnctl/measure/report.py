@@ -24,16 +24,28 @@ from .effects import CATALOGUE
 
 __all__ = ["figure_tag", "table", "page", "write_report_files", "esc", "json_number", "unit_of", "format_fit",
            "diagnosis_dict", "diagnosis_headline", "diagnosis_summary", "plot_diagnosis", "plot_ranking",
-           "diagnosis_html", "write_diagnosis_report", "write_comparison_report"]
+           "diagnosis_html", "write_diagnosis_report", "write_comparison_report", "comparison_html",
+           "diagnosis_plain_headline", "uncertainty_words", "how_to_read", "settings_table", "parameter_table",
+           "figure_block", "record_name_of", "HOW_TO_READ", "pretty_unit", "value_pair"]
 
 _CSS = """
-body{font-family:system-ui,-apple-system,Segoe UI,sans-serif;max-width:1200px;margin:2em auto;padding:0 1em;
-color:#222;line-height:1.45}
-h1{font-size:1.5em}h2{font-size:1.2em;border-bottom:1px solid #ccc;padding-bottom:.2em;margin-top:1.8em}
-table{border-collapse:collapse;font-size:.9em;margin:.6em 0}td,th{border:1px solid #ccc;padding:.25em .6em;
-text-align:right}th{background:#f3f3f3}td.l,th.l{text-align:left}tr.sel td{background:#e9f6e9}
-img{max-width:100%;border:1px solid #eee}.big{font-size:1.15em;background:#f6f8fa;padding:.6em 1em;
-border-left:4px solid #2a7;margin:1em 0}.warn{border-left-color:#d80}code{background:#f3f3f3;padding:0 .2em}
+*{box-sizing:border-box}
+body{font-family:system-ui,-apple-system,Segoe UI,sans-serif;max-width:1180px;margin:1.2em auto;padding:0 1em;
+color:#222;line-height:1.45;font-size:15px}
+h1{font-size:1.45em;margin-bottom:.3em}h2{font-size:1.15em;border-bottom:1px solid #ccc;padding-bottom:.2em;
+margin-top:1.6em}h3{font-size:1.02em;margin-bottom:.3em}
+.scroll{overflow-x:auto;max-width:100%}
+table{border-collapse:collapse;font-size:.88em;margin:.5em 0}td,th{border:1px solid #ccc;padding:.25em .55em;
+text-align:right;vertical-align:top}th{background:#f3f3f3}td.l,th.l{text-align:left}td.w{max-width:30em;
+text-align:left}tr.sel td{background:#e9f6e9}
+img{max-width:100%;height:auto;border:1px solid #eee;display:block;margin:.4em 0}
+.big{font-size:1.12em;background:#f6f8fa;padding:.6em 1em;border-left:4px solid #2a7;margin:1em 0}
+.warn{border-left:4px solid #d80;background:#fff8ec;padding:.4em .8em;margin:.5em 0}
+.howto{background:#f4f7fb;border:1px solid #cdd8e6;border-radius:4px;padding:.5em 1em;margin:1em 0;
+font-size:.92em}.howto h2{border:0;margin:.2em 0;font-size:1.02em}.howto dl{margin:.2em 0}
+.howto dt{font-weight:600;margin-top:.35em}.howto dd{margin-left:1.2em}
+.cap{font-size:.9em;color:#444;margin:.2em 0 1em}
+code{background:#f3f3f3;padding:0 .2em}pre{white-space:pre-wrap;font-size:.88em}
 """
 
 
@@ -62,7 +74,7 @@ def figure_tag(fig, alt: str = "figure") -> str:
     return f'<img alt="{esc(alt)}" src="data:image/png;base64,{data}">'
 
 
-def table(header, rows, left=1, selected=()) -> str:
+def table(header, rows, left=1, selected=(), wrap=()) -> str:
     """Return an HTML table.
 
     Parameters
@@ -75,17 +87,24 @@ def table(header, rows, left=1, selected=()) -> str:
         Number of leading columns aligned left.
     selected : collection of int
         Row indices to highlight.
+    wrap : collection of int
+        Columns of long text, left-aligned and wrapped.
 
     Returns
     -------
     str
     """
-    cls = lambda j: ' class="l"' if j < left else ""  # noqa: E731
-    out = ["<table><tr>" + "".join(f"<th{cls(j)}>{esc(h)}</th>" for j, h in enumerate(header)) + "</tr>"]
+    def cls(j, head=False):
+        if j in wrap and not head:
+            return ' class="w"'
+        return ' class="l"' if j < left or j in wrap else ""
+
+    out = ['<div class="scroll"><table><tr>'
+           + "".join(f"<th{cls(j, True)}>{esc(h)}</th>" for j, h in enumerate(header)) + "</tr>"]
     for i, r in enumerate(rows):
         tr = '<tr class="sel">' if i in selected else "<tr>"
         out.append(tr + "".join(f"<td{cls(j)}>{esc(c)}</td>" for j, c in enumerate(r)) + "</tr>")
-    return "\n".join(out) + "</table>"
+    return "\n".join(out) + "</table></div>"
 
 
 def page(title: str, body: str) -> str:
@@ -188,6 +207,47 @@ def format_fit(fit: dict) -> str:
     str
     """
     return ", ".join(f"{k} {v:.1f} %" for k, v in fit.items())
+
+
+def pretty_unit(unit: str) -> str:
+    """``kg*m^2`` -> ``kg·m²``: a unit as a reader writes it.
+
+    Parameters
+    ----------
+    unit : str
+        Unit in kilnctl's ASCII form.
+
+    Returns
+    -------
+    str
+    """
+    return unit.replace("*", "·").replace("^2", "²").replace("^3", "³").replace("^-1", "⁻¹")
+
+
+def value_pair(v, se) -> tuple[str, str]:
+    """A value and its standard error as two strings with matching decimals: ``('579900', '180')``.
+
+    Parameters
+    ----------
+    v : float
+        Value.
+    se : float or None
+        Standard error (not finite or None: the value alone, 4 digits).
+
+    Returns
+    -------
+    (str, str)
+        The error string is '' when it is not a positive finite number.
+    """
+    if v is None or not math.isfinite(v):
+        return "-", ""
+    if se is None or not math.isfinite(se) or se <= 0:
+        return f"{v:.4g}", ""
+    exp = int(math.floor(math.log10(se)))
+    if abs(v) >= 1e7 or (abs(v) < 1e-3 and v != 0) or exp < -6:
+        return f"{v:.4e}", f"{se:.1e}"
+    dec = max(0, 1 - exp)
+    return f"{v:.{dec}f}", f"{se:.{dec}f}"
 
 
 def _fmt_val(v, se) -> str:
@@ -413,6 +473,232 @@ def plot_ranking(d, fig=None):
     return finish(fig, f"{record_name(d.measurement_.source)}: {diagnosis_headline(d)}")
 
 
+def _effect_words(name: str) -> str:
+    return name.replace("_", " ")
+
+
+def diagnosis_plain_headline(d) -> str:
+    """The diagnosis in one plain sentence, for the top of the report.
+
+    Parameters
+    ----------
+    d : Diagnosis
+        A fitted diagnosis.
+
+    Returns
+    -------
+    str
+    """
+    c0, c1 = d.baseline_["current_A"], d.final_["current_A"]
+    if not d.selected_:
+        s = (f"The model needs no catalogued effect to explain this record: none of the "
+             f"{len(d.ranking_)} candidates passed both tests; the calibrated model fits the current to {c0:.1f} %.")
+        if d.unexplained_:
+            s += f" The residual still has structure the catalogue does not explain: {d.unexplained_['hint']}."
+        return s
+    fc = d.final_calibration_
+    found = []
+    for e in d.selected_:
+        vals = []
+        for fp in CATALOGUE[e].parameters:
+            for k in (fp.name, fp.partner):
+                if k and k in fc.values_:
+                    vals.append(f"{k} = {_value_words(fc.values_[k], fc.stderr_[k], k in fc.not_identifiable_)}"
+                                f" {pretty_unit(unit_of(k))}".rstrip())
+        found.append(_effect_words(e) + (f" ({', '.join(vals)})" if vals else ""))
+    effects = found[0] if len(found) == 1 else ", ".join(found[:-1]) + " and " + found[-1]
+    s = (f"Missing from the model: {effects}. With {'it' if len(found) == 1 else 'them'} the current fit rose "
+         f"from {c0:.1f} % to {c1:.1f} %.")
+    if d.caveats_:
+        s += f" Read the caution{'s' if len(d.caveats_) > 1 else ''} below before acting on it."
+    return s
+
+
+def _value_words(v, se, not_identifiable=False) -> str:
+    """``20.7 ± 0.1``; words where the uncertainty is not a number."""
+    if v is None or not math.isfinite(v):
+        return "not determined"
+    if not_identifiable or se is None or not math.isfinite(se):
+        return f"{v:.4g} (not identifiable from this record)"
+    a, b = value_pair(v, se)
+    return f"{a} ± {b}" if b else a
+
+
+def uncertainty_words(se, not_identifiable: bool = False, on_bound: bool = False) -> str:
+    """The uncertainty of a fitted value in a report cell: ``± 0.13`` or words, never ``± inf``.
+
+    Parameters
+    ----------
+    se : float or None
+        Standard error [unit of the value].
+    not_identifiable : bool
+        The record does not pin the value down.
+    on_bound : bool
+        The fit stopped on the parameter's bound.
+
+    Returns
+    -------
+    str
+    """
+    words = []
+    if not_identifiable or se is None or not math.isfinite(se):
+        words.append("not identifiable from this record: other values fit as well")
+    elif se == 0:
+        words.append("exact (held by the fit)")
+    else:
+        words.append(f"± {value_pair(1.0, se)[1]}")
+    if on_bound:
+        words.append("on its bound: the fit wanted to go further")
+    return "; ".join(words)
+
+
+#: what the numbers in the reports mean, for a reader who is not a statistician
+HOW_TO_READ = {
+    "fit": ("fit %", "How much of the measured signal the model reproduces: 100 % is a perfect match, 0 % is no "
+                     "better than a flat line at the mean (the normalised error of MATLAB's <code>compare</code>). "
+                     "On a start-up record 95 % is good; the last few per cent often hold the effect you look for."),
+    "sigma": ("3 σ intervals", "Where the residual (measured minus model) stays beyond three times its robust "
+                              "standard deviation: there the model fails, not the noise."),
+    "whiteness": ("residual autocorrelation", "A residual that is only noise has its autocorrelation inside the "
+                                              "grey 99 % band; many lags outside mean the model misses something "
+                                              "with a time structure."),
+    "dbic": ("dBIC", "How much the Bayesian information criterion falls when an effect is added, on the fitting "
+                     "part of the record. It charges for every extra parameter; below −{min_delta_bic:g} counts as "
+                     "very strong evidence. It alone is fooled by coloured noise, hence the second test."),
+    "heldout": ("held-out gain", "How much better (in %) the model with the effect predicts the part of the "
+                                 "record it was not fitted on. An effect that only fits noise gains nothing "
+                                 "there; it must gain more than {min_holdout_gain:g} %. An effect is "
+                                 "<b>supported</b> only when it passes both tests."),
+    "cautions": ("cautions", "Where the evidence is weaker than the numbers suggest (a record shorter than the "
+                             "effect's period, a strongly autocorrelated residual). Read them before acting."),
+    "uncertainty": ("± values", "One standard error of a fitted value from the fit's curvature. \"not "
+                                "identifiable\" means the record does not pin the value down: other values fit "
+                                "as well."),
+    "linear": ("linear vs nonlinear", "The design is linear (eq. 21, no load torque, stick or slip inertia); the "
+                                      "nonlinear plant adds the burden's friction and load, its breakaway and "
+                                      "the drive's limits. Where they part, the reasons list says why."),
+    "ramp": ("predicted / verified / baseline", "Predicted: the smooth model the optimizer works on. Verified: "
+                                                "the exact hybrid plant with the same ramp. Baseline: the hybrid "
+                                                "plant with the configured constant ramp. Prediction and "
+                                                "verification must agree within the tolerance, or the result is "
+                                                "flagged."),
+    "objective": ("peak and dynamic stress", "Peak: the highest tooth bending stress of the start-up, running "
+                                             "load included. Dynamic: the stress above the burden's running load "
+                                             "(impacts, acceleration): what a ramp can change."),
+}
+
+
+def how_to_read(keys, **values) -> str:
+    """Return the "how to read this" box for the given terms.
+
+    Parameters
+    ----------
+    keys : sequence of str
+        Terms of :data:`HOW_TO_READ`, in order.
+    **values
+        Numbers the texts name (``min_delta_bic``, ``min_holdout_gain``).
+
+    Returns
+    -------
+    str
+        HTML.
+    """
+    items = "".join(f"<dt>{esc(HOW_TO_READ[k][0])}</dt><dd>{HOW_TO_READ[k][1].format(**values)}</dd>" for k in keys)
+    return f'<div class="howto"><h2>How to read this</h2><dl>{items}</dl></div>'
+
+
+def settings_table(settings: dict, meanings: dict | None = None) -> str:
+    """Return a small two- or three-column table of settings.
+
+    Parameters
+    ----------
+    settings : dict
+        Setting name -> value (lists are joined with commas).
+    meanings : dict, optional
+        Setting name -> what it means.
+
+    Returns
+    -------
+    str
+        HTML.
+    """
+    meanings = meanings or {}
+    rows = []
+    for k, v in settings.items():
+        if isinstance(v, (list, tuple)):
+            v = ", ".join(str(x) for x in v) or "-"
+        elif isinstance(v, float):
+            v = f"{v:g}"
+        rows.append((k, v, meanings.get(k, "")) if meanings else (k, v))
+    header = ["setting", "value", "meaning"] if meanings else ["setting", "value"]
+    return table(header, rows, left=2, wrap=(2,) if meanings else ())
+
+
+def parameter_table(names, values, stderr, *, not_identifiable=(), on_bound=(), description=True) -> str:
+    """Return a table of fitted parameters: value, uncertainty in words where needed, unit, meaning.
+
+    Parameters
+    ----------
+    names : sequence of str
+        Parameter names.
+    values, stderr : dict
+        Value and standard error [unit of the parameter] by name.
+    not_identifiable, on_bound : collection of str
+        Names so flagged by the fit.
+    description : bool, default True
+        Add the parameter's description from :data:`~kilnctl.params.SPECS`.
+
+    Returns
+    -------
+    str
+        HTML.
+    """
+    rows = []
+    for k in names:
+        v, se = values[k], stderr.get(k)
+        val, err = value_pair(v, se)
+        unc = uncertainty_words(se, k in not_identifiable, k in on_bound)
+        if err and k not in not_identifiable:
+            unc = unc.replace(f"± {value_pair(1.0, se)[1]}", f"± {err}")
+        row = [k, val, unc, pretty_unit(unit_of(k))]
+        if description:
+            row.append(SPECS[k].description if k in SPECS else "")
+        rows.append(row)
+    header = ["parameter", "value", "uncertainty", "unit"] + (["meaning"] if description else [])
+    return table(header, rows, left=1, wrap=(2, 4) if description else (2,))
+
+
+def figure_block(fig, alt: str, caption: str = "") -> str:
+    """A figure with its caption.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure.
+    alt : str
+        Alternative text.
+    caption : str
+        What it shows (plain text).
+
+    Returns
+    -------
+    str
+        HTML.
+    """
+    return figure_tag(fig, alt) + (f'<p class="cap">{esc(caption)}</p>' if caption else "")
+
+
+_DIAGNOSIS_SETTINGS = {
+    "calibrate": "base parameters refitted with every structure",
+    "candidates": "catalogue effects tried",
+    "model": "base model",
+    "holdout": "how the held-out part is chosen",
+    "holdout_fraction": "share of the record held out [-]",
+    "min_delta_bic": "a candidate must lower BIC by more than this [-]",
+    "min_holdout_gain_percent": "... and improve the held-out fit by more than this [%]",
+}
+
+
 def diagnosis_html(d, figs=None) -> str:
     """Return the report of a fitted diagnosis as one self-contained HTML page.
 
@@ -429,23 +715,34 @@ def diagnosis_html(d, figs=None) -> str:
     """
     figs = figs or {"s": plot_diagnosis(d), "r": plot_ranking(d)}
     f_sig, f_rank = list(figs.values())
-    parts = [f'<p class="big">{esc(diagnosis_headline(d))}</p>']
+    parts = [f'<p class="big">{esc(diagnosis_plain_headline(d))}</p>']
     if d.unexplained_:
-        parts.append(f'<p class="big warn">Unexplained: {esc(d.unexplained_["text"])}</p>')
+        parts.append(f'<p class="warn"><b>Unexplained:</b> {esc(d.unexplained_["text"])}</p>')
     for c in d.caveats_:
-        parts.append(f'<p class="warn">Caution: {esc(c)}</p>')
+        parts.append(f'<p class="warn"><b>Caution:</b> {esc(c)}</p>')
+    parts.append(how_to_read(("fit", "dbic", "heldout", "cautions", "uncertainty", "sigma"),
+                             min_delta_bic=d.min_delta_bic, min_holdout_gain=d.min_holdout_gain))
     parts.append("<h2>Measured, calibrated base and final model</h2>")
-    parts.append("<p>Shaded: intervals where the base model's |residual| exceeds 3 sigma. "
-                 "Dashed lines: phases of the start-up.</p>")
-    parts.append(figure_tag(f_sig, "signals and residuals"))
+    parts.append(figure_block(f_sig, "signals and residuals",
+                              "Per channel: the signals, the residual, its autocorrelation and its spectrum, for "
+                              "the calibrated base model (blue) and the final model (red). Red shading: where the "
+                              "base model fails beyond 3 sigma. Dashed lines: phases of the start-up."))
     rows = [(f["channel"], f["text"]) for f in d.comparison_base_.failing]
-    parts.append("<h3>Where the base model fails</h3>" + (table(["channel", "interval"], rows, left=2)
+    parts.append("<h3>Where the base model fails</h3>" + (table(["channel", "interval"], rows, left=2, wrap=(1,))
                                                             if rows else "<p>nowhere beyond 3 sigma</p>"))
     rows = [(f["channel"], f["text"]) for f in d.comparison_final_.failing]
-    parts.append("<h3>Where the final model fails</h3>" + (table(["channel", "interval"], rows, left=2)
+    parts.append("<h3>Where the final model fails</h3>" + (table(["channel", "interval"], rows, left=2, wrap=(1,))
                                                              if rows else "<p>nowhere beyond 3 sigma</p>"))
+    fc = d.final_calibration_
+    parts.append("<h2>Final model: fitted parameters</h2>")
+    parts.append(f"<p>{esc(', '.join(d.calibrate))} refitted with "
+                 f"{esc(', '.join(d.selected_) or 'no effect added')} on the whole record "
+                 f"(current fit {d.final_['current_A']:.1f} %, speed fit {d.final_['speed_rpm']:.1f} %).</p>")
+    parts.append(parameter_table(fc.names_, fc.values_, fc.stderr_, not_identifiable=fc.not_identifiable_,
+                                 on_bound=fc.on_bound_))
     parts.append("<h2>Candidates</h2>")
-    parts.append(figure_tag(f_rank, "ranking"))
+    parts.append(figure_block(f_rank, "ranking", "Green: supported (both tests passed); grey: not supported. "
+                              "Dotted lines: the thresholds."))
     for i, rnd in enumerate(d.rounds_):
         parts.append(f"<h3>Round {i + 1}: against " + esc("the calibrated base" if i == 0 else
                                                           "base + " + ", ".join(d.selected_[:i])) + "</h3>")
@@ -453,21 +750,36 @@ def diagnosis_html(d, figs=None) -> str:
         for j, r in enumerate(rnd):
             if r.supported and j == 0:
                 sel.add(j)
-            pars = "; ".join(f"{k} = {_fmt_val(v['value'], v['stderr'])} {v['unit']}".rstrip()
+            pars = "; ".join(f"{k} = {_value_words(v['value'], v['stderr'])} {pretty_unit(v['unit'])}".rstrip()
                              for k, v in r.parameters.items() if k in _effect_params(r.effect))
             rows.append((r.effect, f"{r.delta_bic:.1f}", f"{r.holdout_gain:+.1f}",
-                         f"{r.fit_percent.get('current_A', math.nan):.1f}",
-                         f"{r.fit_percent.get('speed_rpm', math.nan):.2f}", pars or "-",
-                         ", ".join(r.on_bound) or "-", "supported" if r.supported else r.reason))
-        parts.append(table(["effect", "dBIC", "held-out gain %", "fit I %", "fit n %", "effect parameters",
-                            "on bound", "verdict"], rows, left=1, selected=sel))
-    parts.append("<h2>Final model</h2><pre>" + esc(d.final_calibration_.summary()) + "</pre>")
-    parts.append("<h2>Residual signature of the final model</h2><pre>"
-                 + esc(d.signature_["text"]) + "</pre>")
+                         f"{r.fit_percent.get('current_A', math.nan):.1f}", pars or "-",
+                         ("on bound: " + ", ".join(r.on_bound) + ". ") * bool(r.on_bound)
+                         + ("supported" if r.supported else r.reason)))
+        parts.append(table(["effect", "dBIC", "held-out gain [%]", "current fit [%]", "effect parameters",
+                            "verdict"], rows, left=1, selected=sel, wrap=(4, 5)))
+    parts.append("<h2>What the final model still misses</h2><p>" + esc(d.signature_["text"]) + "</p>")
     for note in d.experiment_.notes:
         parts.append(f"<p>Note: {esc(note)}</p>")
-    parts.append("<h2>Settings</h2><pre>" + esc(str(diagnosis_dict(d)["settings"])) + "</pre>")
-    return page(f"kilnctl diagnose: {d.measurement_.source}", "\n".join(parts))
+    parts.append("<h2>Settings</h2>" + settings_table(diagnosis_dict(d)["settings"], _DIAGNOSIS_SETTINGS))
+    return page(f"Diagnosis of {record_name_of(d.measurement_.source)}", "\n".join(parts))
+
+
+def record_name_of(source) -> str:
+    """The record's file name (see :func:`kilnctl.figures.record_name`).
+
+    Parameters
+    ----------
+    source : str or path-like
+        Source of the record.
+
+    Returns
+    -------
+    str
+    """
+    from ..figures import record_name
+
+    return record_name(source)
 
 
 def write_diagnosis_report(d, folder, protect=()) -> list:
@@ -498,6 +810,48 @@ def write_diagnosis_report(d, folder, protect=()) -> list:
 
 
 # --- comparison ------------------------------------------------------------------------------------
+def comparison_html(c, fig=None) -> str:
+    """Return the report of a comparison as one self-contained HTML page.
+
+    Parameters
+    ----------
+    c : Comparison
+        A comparison of a model with a record.
+    fig : matplotlib.figure.Figure, optional
+        Its figure, already drawn.
+
+    Returns
+    -------
+    str
+    """
+    fig = fig or c.plot()
+    names = {"current_A": "current", "speed_rpm": "speed"}
+    model = f"{c.model} model" + (f" with {', '.join(c.effects)}" if c.effects else "")
+    fits = " and ".join(f"the {names.get(k, k)} to {ch.fit:.1f} %" for k, ch in c.channels.items())
+    fails = c.failing
+    head = f"The {model} reproduces {fits}. " + (
+        f"It fails beyond 3 sigma in {len(fails)} interval{'s' if len(fails) > 1 else ''}, the first "
+        f"{fails[0]['text']}." if fails else "Nowhere does its residual stay beyond 3 sigma.")
+    parts = [f'<p class="big">{esc(head)}</p>', how_to_read(("fit", "sigma", "whiteness"))]
+    rows = []
+    for k, ch in c.channels.items():
+        w = ch.whiteness
+        rows.append((names.get(k, k), f"{ch.fit:.1f}", f"{ch.rms:.3g}", f"{ch.bias:+.3g}", ch.unit,
+                     f"{w['n_outside']} of {len(w['lags']) - 1}", f"{ch.spectrum['dominant_hz']:.2f}"))
+    parts.append("<h2>Per channel</h2>" + table(["channel", "fit [%]", "residual rms", "bias", "unit",
+                                                 "autocorrelation lags outside 99 % band",
+                                                 "dominant residual frequency [Hz]"], rows))
+    parts.append("<h2>Measured and model</h2>" + figure_block(fig, "measured vs model"))
+    rows = [(f["channel"], f["text"]) for f in fails]
+    parts.append("<h2>Where it fails</h2>" + (table(["channel", "interval"], rows, left=2, wrap=(1,))
+                                              if rows else "<p>nowhere beyond 3 sigma</p>"))
+    for note in c.experiment.notes:
+        parts.append(f"<p>Note: {esc(note)}</p>")
+    parts.append("<h2>Settings</h2>" + settings_table({"model": c.model, "effects": list(c.effects),
+                                                       "record": record_name_of(c.source)}))
+    return page(f"{record_name_of(c.source)} against the {model}", "\n".join(parts))
+
+
 def write_comparison_report(c, folder, protect=()) -> list:
     """Write ``compare.html`` (self-contained), ``compare.json`` and ``compare.png`` into a folder.
 
@@ -518,6 +872,5 @@ def write_comparison_report(c, folder, protect=()) -> list:
     fig = c.plot()
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=110)
-    body = ("<pre>" + esc("\n".join(c.summary_lines())) + "</pre>\n" + figure_tag(fig, "measured vs model"))
-    return write_report_files(folder, {"compare.html": page(f"kilnctl compare: {c.source}", body),
+    return write_report_files(folder, {"compare.html": comparison_html(c, fig),
                                        "compare.json": c.to_dict(), "compare.png": buf.getvalue()}, protect=protect)

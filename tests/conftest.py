@@ -1,0 +1,68 @@
+"""Shared test helpers: loading a report page in headless Chromium."""
+
+import html
+import json
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+import pytest
+
+#: injected first into a copy of the page: records script errors, console.error calls and resources that fail
+#: to load, then, after the load event, writes them with the images that did not decode into <pre id=__probe>
+_PROBE = """<script>
+window.__errs = [];
+window.addEventListener('error', function (e) {
+  var t = e.target;
+  if (t && t.tagName) { window.__errs.push('resource failed: ' + t.tagName + ' ' + (t.src || t.href || '').slice(0, 60)); }
+  else { window.__errs.push('error: ' + e.message); }
+}, true);
+(function () { var ce = console.error; console.error = function () {
+  window.__errs.push('console.error: ' + Array.prototype.join.call(arguments, ' ')); ce.apply(console, arguments); }; })();
+window.addEventListener('load', function () {
+  var bad = [], imgs = document.images;
+  for (var i = 0; i < imgs.length; i++) { if (!imgs[i].complete || imgs[i].naturalWidth === 0) bad.push(imgs[i].alt || 'image ' + i); }
+  var d = document.createElement('pre'); d.id = '__probe';
+  d.textContent = JSON.stringify({errors: window.__errs, broken_images: bad, images: imgs.length,
+                                  page_width: document.documentElement.scrollWidth});
+  document.body.appendChild(d);
+});
+</script>"""
+
+
+def _chromium():
+    for name in ("chromium", "chromium-browser", "google-chrome", "chrome"):
+        path = shutil.which(name)
+        if path:
+            return path
+    return None
+
+
+@pytest.fixture(scope="session")
+def load_in_chromium(tmp_path_factory):
+    """Return ``load(page) -> dict``: the page loaded in headless Chromium in a 1300 px window.
+
+    The dict holds ``errors`` (script errors, console errors, resources that
+    failed), ``broken_images``, ``images`` (count) and ``page_width`` [px].
+    Skipped, with the reason, where Chromium is not installed.
+    """
+    exe = _chromium()
+    if exe is None:
+        pytest.skip("Chromium is not installed (Debian: apt-get install -y chromium; `make test` installs it "
+                    "when run as root): the report pages are not checked in a browser")
+    folder = tmp_path_factory.mktemp("chromium")
+
+    def load(page):
+        page = Path(page)
+        text = page.read_text(encoding="utf-8")
+        probed = folder / f"probed-{page.name}"
+        probed.write_text(re.sub(r"<head>", "<head>" + _PROBE, text, count=1), encoding="utf-8")
+        run = subprocess.run([exe, "--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars",
+                              "--window-size=1300,900", "--virtual-time-budget=10000", "--dump-dom",
+                              probed.as_uri()], capture_output=True, text=True, timeout=120)
+        found = re.search(r'<pre id="__probe">(.*?)</pre>', run.stdout, re.S)
+        assert found, f"Chromium did not load {page} (exit {run.returncode}): {run.stderr[-2000:]}"
+        return json.loads(html.unescape(found.group(1)))
+
+    return load
