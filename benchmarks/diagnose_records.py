@@ -407,6 +407,63 @@ def _jsonable(obj):
     return obj
 
 
+#: an effect that lifts the current fit by less than this at the true values is below the noise [points]
+INVISIBLE_POINTS = 0.1
+
+
+def visibility(m, truth) -> dict:
+    """How much a record's effects show: kilnctl's structures at the TRUE values, uncalibrated.
+
+    Parameters
+    ----------
+    m : kilnctl.measure.Measurement
+        The record (from :func:`make`).
+    truth : dict
+        Its truth.
+
+    Returns
+    -------
+    dict
+        ``base_fit`` and ``true_fit``: current fit [%] of kilnctl's base
+        model and of the expected catalogue effects, with the plant's true
+        base values (and the effects' true values); ``gain`` {effect: points}:
+        how much the true structure loses without each effect;
+        ``invisible``: the effects whose gain is below
+        :data:`INVISIBLE_POINTS` (no diagnosis can be asked to find them).
+        A true structure far below the noise-limited fit (about 98 %) says
+        kilnctl's form of the effect does not reproduce this plant's.
+    """
+    from kilnctl import Parameters
+    from kilnctl.measure.effects import CATALOGUE, effect_components
+    from kilnctl.measure.runner import run_model
+    from kilnctl.measure.stats import fit_percent
+    from kilnctl.measure.synthetic import DEFAULT_GAINS
+    from kilnctl.simulate import resolve_gains
+
+    setup = resolve_gains(Parameters(DEFAULT_GAINS))
+    exp = m.experiment(setup)
+    active = m.t >= exp.t0 - 1e-9
+    expected = tuple(truth["expected"])
+
+    def fit(effects):
+        model = "micro" if any(CATALOGUE[e].model == "micro" for e in effects) else "macro"
+        comps, p = effect_components(effects, setup, model=model)
+        vals = dict(truth["base"])
+        names = {fp.name for e in effects for fp in CATALOGUE[e].parameters} \
+            | {fp.partner for e in effects for fp in CATALOGUE[e].parameters if fp.partner}
+        vals.update({k: v for k, v in truth["catalogue_values"].items() if k in names})
+        try:
+            run = run_model(p.replace(**vals), m, exp, model=model, effects=comps)
+            return float(fit_percent(m.current[active], run.outputs["current_A"]))
+        except Exception:  # noqa: BLE001 - a structure the simulator refuses shows nothing
+            return float("nan")
+
+    out = {"base_fit": fit(()), "true_fit": fit(expected)}
+    out["gain"] = {e: out["true_fit"] - fit(tuple(x for x in expected if x != e)) for e in expected}
+    out["invisible"] = [e for e, g in out["gain"].items() if not g >= INVISIBLE_POINTS]
+    return out
+
+
 def main(argv=None) -> int:
     """List the records or write them as CSV files; return the exit code."""
     ap = argparse.ArgumentParser(prog="python -m benchmarks.diagnose_records")
@@ -414,9 +471,19 @@ def main(argv=None) -> int:
     ap.add_argument("--write", metavar="FOLDER", help="write the records (CSV + truth JSON) there")
     ap.add_argument("--quick", action="store_true", help="only the quick subset")
     ap.add_argument("--record", action="append", default=[], help="only this record (repeatable)")
+    ap.add_argument("--visibility", action="store_true",
+                    help="print the current fit of kilnctl's base and true structure at the true values")
     args = ap.parse_args(argv)
     specs = [find(n) for n in args.record] if args.record else \
         ([find(n) for n in QUICK] if args.quick else list(RECORDS))
+    if args.visibility:
+        print(f"{'record':<52}{'expected':<44}{'base':>7}{'true':>7}  gain of each effect [points]")
+        for s in specs:
+            m, truth = make(s)
+            v = visibility(m, truth)
+            print(f"{s.name:<52}{', '.join(truth['expected']) or '-':<44}{v['base_fit']:>7.2f}{v['true_fit']:>7.2f}"
+                  + "".join(f"  {e} {g:+.2f}" for e, g in v["gain"].items()), flush=True)
+        return 0
     if args.write:
         for s in specs:
             c, _, truth = write(s, args.write)

@@ -66,3 +66,24 @@ def test_offset_step_is_in_the_logged_current_only():
     k = np.searchsorted(m.t, step["t_s"])
     before, after = m.current[k - 100:k], m.current[k:k + 100]
     assert np.mean(after) - np.mean(before) == pytest.approx(step["A"], abs=15.0)
+
+
+def test_visibility_sees_the_true_structure_reproduce_a_kilnctl_record():
+    # Truth: a record from kilnctl's own generator is its model plus noise, so the true structure at the true
+    # values leaves only the noise: 4 A white + 4 A AR(1) on the current -> rms about sqrt(32) = 5.7 A.  A drag
+    # of 3x the plausible range (B_o = 3e7) is far above the noise; a 0.6 ms sensor lag (a hundredth of the
+    # speed loop's time scale) is below it.
+    from benchmarks.diagnose_records import visibility
+
+    m, truth = make(find("range:viscous_drag@3x/s1"))
+    v = visibility(m, truth)
+    assert v["gain"]["viscous_drag"] > 10.0 and v["invisible"] == []
+    setup = Parameters(DEFAULT_GAINS)
+    active = m.t >= m.experiment(setup).t0 - 1e-9
+    y = m.current[active]
+    rms_noise = np.sqrt(32.0)
+    # fit % = 100 (1 - |e| / |y - mean y|) with |e| = rms_noise sqrt(n), within 15 % of the noise level
+    expected_fit = 100.0 * (1.0 - rms_noise * np.sqrt(y.size) / np.linalg.norm(y - y.mean()))
+    assert v["true_fit"] == pytest.approx(expected_fit, abs=0.15 * (100.0 - expected_fit))
+    m2, truth2 = make(find("range:speed_sensor_lag@0.3x/s1"))
+    assert visibility(m2, truth2)["invisible"] == ["speed_sensor_lag"]
