@@ -64,6 +64,17 @@ def resolve_gains(params: Parameters) -> Parameters:
     return params.replace(gains="given", k_p=g.k_p, k_I=g.k_I, k_D=g.k_D)
 
 
+def _check_size(names, params, t_end, dt, max_events, max_samples, n_grid, rtol, atol, **names_for_message):
+    """Refuse a run whose recorded output would exceed ``max_samples``, before any design or integration."""
+    from .budget import check_run_size
+
+    # the structure only depends on the string options; gains='given' is what the run itself uses
+    plant = get_plant(names, params if params.gains == "given" else params.replace(gains="given"),
+                      n_grid=n_grid, rtol=rtol, atol=atol)
+    check_run_size(t_end, dt, len(plant.state_names), len(plant.output_names), len(plant.moded),
+                   max_events=max_events, max_samples=max_samples, **names_for_message)
+
+
 def _check_horizon(t_end, dt):
     for name, v in (("t_end", t_end), ("dt", dt)):
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
@@ -368,7 +379,7 @@ def simulate(params: Parameters | None = None, model: str = "macro", t_end: floa
              effects=(), remove=(), components=None, dt: float | None = None,
              rtol: float = 1e-7, atol: float = 1e-8, event_tol: float = 1e-9,
              max_events: int = 5000, n_grid: int = 500, initial=None, initial_mode=None,
-             method: str = "auto", max_step: float | None = None) -> Response:
+             method: str = "auto", max_step: float | None = None, max_samples: int | None = None) -> Response:
     """Simulate a start-up of the kiln drive on the nonlinear hybrid plant.
 
     Parameters
@@ -419,6 +430,11 @@ def simulate(params: Parameters | None = None, model: str = "macro", t_end: floa
         ``{"omega_kiln": 0.05}``); the others start as the components say.
     initial_mode : dict, optional
         Initial mode by component name (e.g. ``{"burden": "slip_pos"}``).
+    max_samples : int, optional
+        Largest number of output samples (``t_end/dt`` plus two per mode
+        switch) the run may record; checked before anything runs.  Default:
+        the environment variable ``KILNCTL_MAX_SAMPLES`` or 1 000 000 (about
+        0.5 GB for the micro model), see :mod:`kilnctl.budget`.
 
     Returns
     -------
@@ -429,7 +445,8 @@ def simulate(params: Parameters | None = None, model: str = "macro", t_end: floa
     Raises
     ------
     SimulationError
-        Bad horizon, integrator failure or an unstable (non-finite) run.
+        Bad horizon, a run above ``max_samples``, integrator failure or an
+        unstable (non-finite) run.
     EventStormError
         Mode switches without end; names the component and mode pair.
     ModelError
@@ -445,6 +462,7 @@ def simulate(params: Parameters | None = None, model: str = "macro", t_end: floa
     if isinstance(max_events, bool) or not isinstance(max_events, int) or max_events < 1:
         raise SimulationError(f"max_events = {max_events!r} must be a positive integer")
     names = tuple(components) if components is not None else component_names(model, effects, remove)
+    _check_size(names, params, t_end, dt, max_events, max_samples, n_grid, rtol, atol)
     if "pid" in names:
         params = resolve_gains(params)
     plant = get_plant(names, params, n_grid=n_grid, rtol=rtol, atol=atol)

@@ -38,6 +38,10 @@ def register(sub) -> None:
     add_config_arg(p)
     p.add_argument("--t-end", type=float, default=DEFAULT_T_END, metavar="S",
                    help=f"simulated time [s] (default {DEFAULT_T_END:g})")
+    p.add_argument("--max-samples", type=int, default=None, metavar="N",
+                   help="largest number of output samples (t_end/dt) the run may keep in memory, checked before "
+                        "it starts (default 1000000, about 0.5 GB; or the environment variable "
+                        "KILNCTL_MAX_SAMPLES)")
     p.add_argument("--law", choices=SPECS["friction_law"].choices, default=None,
                    help="burden friction law: 'paper' (eq. 3 as printed) or 'torque' (torque-consistent); "
                         "default: the config's friction_law")
@@ -150,7 +154,7 @@ def run(args) -> int:
     if args.law is not None:
         params = params.replace(friction_law=args.law)
     components = component_names(args.model, effects)  # checks the names before any work
-    resp = simulate(params, args.model, t_end=args.t_end, effects=effects)
+    resp = simulate(params, args.model, t_end=args.t_end, effects=effects, max_samples=args.max_samples)
     if args.csv:
         resp.to_csv(args.csv)
     if args.plot:

@@ -48,6 +48,9 @@ def register(sub) -> None:
     p.add_argument("--cache", metavar="DIR", default=str(DEFAULT_CACHE),
                    help=f"folder of finished points (default {DEFAULT_CACHE})")
     p.add_argument("--no-cache", action="store_true", help="neither read nor store finished points")
+    p.add_argument("--max-points", type=int, default=None, metavar="N",
+                   help="largest number of points, checked before any is built (default 100000, or the "
+                        "environment variable KILNCTL_MAX_POINTS)")
     p.add_argument("--dry-run", action="store_true", help="check the spec and list the study; simulate nothing")
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -139,7 +142,7 @@ def run(args) -> int:
     from ..sweep import load_spec
 
     _check_outputs(args)
-    study = load_spec(args.spec)
+    study = load_spec(args.spec, max_points=args.max_points)
     study.parameter_sets()  # every point is checked before anything runs
     threshold = threshold_si(study.outputs[0], args.threshold)
     if args.dry_run:

@@ -283,7 +283,8 @@ class Grid(Space):
             self.values[nm] = vals
 
     @classmethod
-    def linspace(cls, low: float, high: float, num: int, scale: str = "linear") -> tuple[float, ...]:
+    def linspace(cls, low: float, high: float, num: int, scale: str = "linear",
+                 max_points: int | None = None) -> tuple[float, ...]:
         """Return ``num`` evenly spaced values from ``low`` to ``high`` (both included).
 
         Parameters
@@ -294,13 +295,20 @@ class Grid(Space):
             Number of values, >= 1.
         scale : {'linear', 'log'}
             Even spacing in the value or in its logarithm (then low > 0).
+        max_points : int, optional
+            Largest ``num`` accepted (checked before any value is made);
+            default: :data:`kilnctl.budget.DEFAULT_MAX_POINTS` or the
+            environment variable ``KILNCTL_MAX_POINTS``.
 
         Returns
         -------
         tuple of float
         """
+        from ..budget import check_points
+
         if isinstance(num, bool) or not isinstance(num, int) or num < 1:
             raise ParameterError(f"num = {num!r} must be an integer >= 1")
+        check_points(num, max_points, what=f"num = {num}: the grid variable")
         if num == 1:
             return (_num("grid", "low", low),)
         _check_range("grid", low, high)

@@ -52,6 +52,7 @@ import tomllib
 from pathlib import Path
 from typing import Any, Mapping
 
+from ..budget import check_points
 from ..errors import ConfigFileError, KilnctlError, ParameterError, close_matches_hint
 from ..params import Parameters
 from .space import DISTRIBUTIONS, Grid, LatinHypercube, LogUniform, MonteCarlo, Uniform
@@ -79,7 +80,7 @@ def _unknown(keys, known, where):
             raise SpecError(f"{where}: unknown key {k!r}: {close_matches_hint(k, known)}")
 
 
-def _variable(name: str, entry: Mapping[str, Any], method: str):
+def _variable(name: str, entry: Mapping[str, Any], method: str, max_points: int | None = None):
     """Return (grid values or distribution, factor targets or None) of one [parameters.NAME] table."""
     where = f"[parameters.{name}]"
     if not isinstance(entry, Mapping):
@@ -106,7 +107,8 @@ def _variable(name: str, entry: Mapping[str, Any], method: str):
         if missing:
             raise SpecError(f"{where}: a grid variable needs values = [...] or min, max and num (missing: "
                             + ", ".join(missing) + ")")
-        return list(Grid.linspace(entry["min"], entry["max"], entry["num"], entry.get("scale", "linear"))), factor
+        return list(Grid.linspace(entry["min"], entry["max"], entry["num"], entry.get("scale", "linear"),
+                                  max_points=max_points)), factor
     dist = entry.get("dist")
     if dist is None:
         _unknown(keys, ("min", "max", "scale", "dist"), where)
@@ -128,7 +130,8 @@ def _variable(name: str, entry: Mapping[str, Any], method: str):
     return DISTRIBUTIONS[dist](*(entry[a] for a in args)), factor
 
 
-def study_from_dict(spec: Mapping[str, Any], base_dir: str | Path = ".", name: str = "sweep") -> Study:
+def study_from_dict(spec: Mapping[str, Any], base_dir: str | Path = ".", name: str = "sweep",
+                    max_points: int | None = None) -> Study:
     """Build a :class:`Study` from a parsed spec (see the module text for the format).
 
     Parameters
@@ -139,6 +142,9 @@ def study_from_dict(spec: Mapping[str, Any], base_dir: str | Path = ".", name: s
         Folder that a relative ``config`` path is taken from.
     name : str, default 'sweep'
         Study name when the spec has none.
+    max_points : int, optional
+        Largest number of points (checked before any point is built); default
+        ``KILNCTL_MAX_POINTS`` or 100 000 (:mod:`kilnctl.budget`).
 
     Returns
     -------
@@ -149,6 +155,8 @@ def study_from_dict(spec: Mapping[str, Any], base_dir: str | Path = ".", name: s
     SpecError
         Unknown keys, a bad method, missing or empty ranges (each message names
         the key).
+    ParameterError
+        More points than ``max_points``.
     ParameterError, ModelError
         Unknown parameters, outputs or components (with close matches).
     """
@@ -180,7 +188,7 @@ def study_from_dict(spec: Mapping[str, Any], base_dir: str | Path = ".", name: s
     dims, factors = {}, {}
     for vname, entry in params.items():
         try:
-            dims[vname], factor = _variable(vname, entry, method)
+            dims[vname], factor = _variable(vname, entry, method, max_points)
         except ParameterError as exc:
             if isinstance(exc, SpecError):
                 raise
@@ -191,6 +199,8 @@ def study_from_dict(spec: Mapping[str, Any], base_dir: str | Path = ".", name: s
         space = Grid(dims)
     else:
         space = METHODS[method](dims, n=spec["n"], seed=spec.get("seed", 0))
+    check_points(len(space), max_points, what="the grid (the product of the variables' value counts)"
+                 if method == "grid" else f"n = {spec['n']}: the study")
     outputs = spec.get("outputs", ["peak_stress_Pa"])
     if isinstance(outputs, str):
         outputs = [outputs]
@@ -199,7 +209,8 @@ def study_from_dict(spec: Mapping[str, Any], base_dir: str | Path = ".", name: s
         raise SpecError("[options] must be a table of simulation options")
     return Study(space, outputs, model=spec.get("model", "micro"), t_end=spec.get("t_end", 40.0), base=base,
                  effects=spec.get("effects", ()), remove=spec.get("remove", ()), factors=factors,
-                 options=options, name=str(spec.get("name", name)), redesign=_flag(spec, "redesign"))
+                 options=options, name=str(spec.get("name", name)), redesign=_flag(spec, "redesign"),
+                 max_points=max_points)
 
 
 def _flag(spec, key: str) -> bool:
@@ -209,13 +220,15 @@ def _flag(spec, key: str) -> bool:
     return v
 
 
-def load_spec(path: str | Path) -> Study:
+def load_spec(path: str | Path, max_points: int | None = None) -> Study:
     """Read a sweep spec file and return its study.
 
     Parameters
     ----------
     path : path-like
         The TOML file.
+    max_points : int, optional
+        Largest number of points, see :func:`study_from_dict`.
 
     Returns
     -------
@@ -239,7 +252,7 @@ def load_spec(path: str | Path) -> Study:
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise SpecError(f"{path}: not a valid TOML file ({exc})") from None
     try:
-        return study_from_dict(raw, base_dir=path.parent, name=path.stem)
+        return study_from_dict(raw, base_dir=path.parent, name=path.stem, max_points=max_points)
     except KilnctlError as exc:
         if str(exc).startswith(str(path)):
             raise

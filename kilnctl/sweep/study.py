@@ -42,7 +42,7 @@ OUTPUTS: dict[str, tuple[str, str]] = {
 }
 
 #: keyword options of :func:`kilnctl.simulate.simulate` a study may set for every point
-SIM_OPTIONS = ("dt", "rtol", "atol", "event_tol", "max_events", "n_grid", "method", "max_step")
+SIM_OPTIONS = ("dt", "rtol", "atol", "event_tol", "max_events", "n_grid", "method", "max_step", "max_samples")
 
 #: source files whose content decides a simulation's result; their hash is part of every cache key
 _CODE_PARTS = ("params.py", "simulate.py", "response.py", "linear.py", "model", "design")
@@ -108,12 +108,20 @@ class Study:
         controller is not retuned as its burden or backlash changes, and one
         design is far cheaper than one per point); True designs them anew at
         every point.
+    max_points : int, optional
+        Largest number of points, checked before any point is built; default:
+        the environment variable ``KILNCTL_MAX_POINTS`` or 100 000
+        (:mod:`kilnctl.budget`).
 
     Raises
     ------
     ParameterError
         An unknown variable, output or option (with close matches), a factor
-        on a non-numeric parameter, or a non-positive ``t_end``.
+        on a non-numeric parameter, a non-positive ``t_end``, or more points
+        than ``max_points``.
+    SimulationError
+        A start-up whose output would exceed the sample limit (``t_end``,
+        ``dt`` and the ``max_samples`` option; see :mod:`kilnctl.budget`).
     ModelError
         An unknown model or component.
     """
@@ -122,12 +130,14 @@ class Study:
                  model: str = "micro", t_end: float = 40.0, base: Parameters | None = None,
                  effects: Sequence[str] = (), remove: Sequence[str] = (),
                  factors: Mapping[str, Sequence[str]] | None = None, options: Mapping | None = None,
-                 name: str = "sweep", redesign: bool = False):
+                 name: str = "sweep", redesign: bool = False, max_points: int | None = None):
+        from ..budget import check_points
         from ..model import component_names
 
         if not isinstance(space, Space):
             raise ParameterError(f"space must be a Grid, LatinHypercube or MonteCarlo, not {type(space).__name__}")
         self.space = space
+        check_points(len(space), max_points, what="the study")
         self.base = Parameters() if base is None else base
         if not isinstance(self.base, Parameters):
             raise ParameterError(f"base must be a kilnctl.Parameters, not {type(self.base).__name__}")
@@ -149,6 +159,7 @@ class Study:
         for k in self.options:
             if k not in SIM_OPTIONS:
                 raise ParameterError(f"unknown simulation option {k!r}: {close_matches_hint(k, SIM_OPTIONS)}")
+        self._check_run_size()
 
     # --- validation -------------------------------------------------------------------------
     def _check_factors(self):
@@ -176,6 +187,21 @@ class Study:
         unused = set(self.factors) - set(self.space.names)
         if unused:
             raise ParameterError(f"factor(s) {sorted(unused)} declared but not in the space")
+
+    def _check_run_size(self):
+        """Refuse a start-up too long for memory before the first point is built (same check as simulate)."""
+        from ..model import component_names
+        from ..simulate import DEFAULT_DT, _check_horizon, _check_size
+
+        opt = self.options
+        dt = opt.get("dt", DEFAULT_DT.get(self.model, 1e-3))
+        _check_horizon(self.t_end, dt)
+        events = opt.get("max_events", 5000)
+        events = events if isinstance(events, int) and not isinstance(events, bool) and events > 0 else 0
+        # n_grid, rtol, atol do not change the plant's size: the defaults serve (a bad value fails at the point)
+        _check_size(component_names(self.model, self.effects, self.remove), self.base, self.t_end, dt, events,
+                    opt.get("max_samples"), 500, 1e-7, 1e-8, t_end_name="t_end",
+                    limit_name="max_samples = N in [options] of the spec (Study(options={'max_samples': N})")
 
     @staticmethod
     def _check_outputs(outputs):
