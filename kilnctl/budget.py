@@ -27,7 +27,7 @@ Examples
 >>> est.samples
 40001
 >>> round(est.bytes / 1e6, 1)
-18.8
+18.7
 """
 
 from __future__ import annotations
