@@ -8,11 +8,19 @@ taking the parsed arguments and returning an exit code.
 from __future__ import annotations
 
 import argparse
+import contextlib
+import ctypes
 import importlib
 import json
+import os
+import signal
 import sys
+import threading
 
 from ..errors import KilnctlError
+
+#: exit code of a run stopped by Ctrl-C (128 + SIGINT, as a shell reports it)
+EXIT_INTERRUPTED = 130
 
 #: subcommand modules, in the order ``kilnctl --help`` lists them
 COMMANDS = ("params_cmd", "design_cmd", "simulate_cmd", "verify_cmd", "optimize_cmd", "compare_cmd",
@@ -75,6 +83,91 @@ def print_json(obj) -> None:
     sys.stdout.write("\n")
 
 
+def _stop_now(signum, frame) -> None:  # pragma: no cover - runs in a process that ends here
+    """Second Ctrl-C: end at once, whatever clean-up the first one started (worker processes too)."""
+    import multiprocessing
+
+    for child in multiprocessing.active_children():
+        with contextlib.suppress(Exception):
+            child.kill()
+    os.write(2, b"kilnctl: interrupted again; stopped at once\n")
+    os._exit(EXIT_INTERRUPTED)
+
+
+def _handled_exception(ident: int):
+    """The exception the thread ``ident`` is handling now (in an ``except`` or ``finally``), or None."""
+    exc = sys._current_exceptions().get(ident)
+    if isinstance(exc, tuple):  # Python < 3.12: an exc_info triple
+        exc = exc[1]
+    return exc
+
+
+class _Interrupts:
+    """Ctrl-C raises KeyboardInterrupt once (clean-up runs); a second one ends the process at once.
+
+    Some C wrappers clear any Python exception raised while they run, a KeyboardInterrupt included
+    (seen with CasADi 3.8: SWIG's overload resolution calls back into Python and drops the errors; a
+    Ctrl-C during the model build was ignored and the run went on).  So after the first Ctrl-C a watcher
+    thread checks that the main thread is handling the KeyboardInterrupt, and raises it again in that
+    thread if it is not.
+    """
+
+    #: seconds between the watcher's checks; three misses in a row make it raise again
+    POLL = 0.1
+
+    def __init__(self):
+        self.done = threading.Event()
+        self.ident = threading.get_ident()
+
+    def first(self, signum, frame):
+        signal.signal(signal.SIGINT, _stop_now)
+        threading.Thread(target=self._watch, name="kilnctl-interrupt", daemon=True).start()
+        raise KeyboardInterrupt
+
+    def _watch(self):
+        misses = 0
+        while not self.done.wait(self.POLL):
+            if isinstance(_handled_exception(self.ident), KeyboardInterrupt):
+                misses = 0
+                continue
+            misses += 1
+            if misses >= 3:
+                ctypes.pythonapi.PyThreadState_SetAsyncExc(ctypes.c_ulong(self.ident),
+                                                           ctypes.py_object(KeyboardInterrupt))
+                misses = 0
+
+
+def _mark_interrupt_handled() -> None:
+    """Clear CPython's "unhandled KeyboardInterrupt" flag, so the process exits with our code, 130.
+
+    CPython sets the flag when a KeyboardInterrupt leaves code run through ``PyRun_*`` (C extensions
+    such as CasADi's SWIG wrappers do), even if Python code catches it later; at exit it then kills
+    itself with SIGINT (status -2) instead of returning 130.  The flag is private: if it is not
+    there, nothing is done.
+    """
+    with contextlib.suppress(ValueError, AttributeError):
+        ctypes.c_int.in_dll(ctypes.pythonapi, "_Py_UnhandledKeyboardInterrupt").value = 0
+
+
+@contextlib.contextmanager
+def _interrupts():
+    """Install the Ctrl-C handling of :class:`_Interrupts` for the block; yield it (or None).
+
+    Installed only in the main thread, and the previous handler is put back on the way out (so
+    calling :func:`main` in-process, as the tests do, leaves the caller's handling alone).
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield None
+        return
+    state = _Interrupts()
+    previous = signal.signal(signal.SIGINT, state.first)
+    try:
+        yield state
+    finally:
+        state.done.set()
+        signal.signal(signal.SIGINT, previous)
+
+
 def main(argv=None) -> int:
     """Run the ``kilnctl`` command line.
 
@@ -86,18 +179,30 @@ def main(argv=None) -> int:
     Returns
     -------
     int
-        Exit code: 0 on success, 2 on a user error (message on stderr).
+        Exit code: 0 on success, 2 on a user error (message on stderr), 130
+        when stopped by Ctrl-C (one line on stderr, no traceback; outputs are
+        written whole or not at all, and a sweep's worker processes are
+        ended).  A second Ctrl-C during the clean-up ends the process at once.
     """
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    try:
-        return int(args.func(args) or 0)
-    except KilnctlError as exc:
-        print(f"kilnctl {args.command}: error: {exc}", file=sys.stderr)
-        return 2
-    except BrokenPipeError:  # output piped into `head` and closed early
-        sys.stderr.close()
-        return 0
+    command = "kilnctl"
+    with _interrupts() as state:
+        try:
+            args = build_parser().parse_args(argv)
+            command = f"kilnctl {args.command}"
+            return int(args.func(args) or 0)
+        except KilnctlError as exc:
+            print(f"{command}: error: {exc}", file=sys.stderr)
+            return 2
+        except KeyboardInterrupt as exc:
+            if state is not None:
+                state.done.set()
+            note = str(exc)
+            print(f"{command}: interrupted" + (f"; {note}" if note else ""), file=sys.stderr)
+            _mark_interrupt_handled()
+            return EXIT_INTERRUPTED
+        except BrokenPipeError:  # output piped into `head` and closed early
+            sys.stderr.close()
+            return 0
 
 
 if __name__ == "__main__":  # pragma: no cover

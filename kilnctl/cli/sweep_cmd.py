@@ -10,7 +10,6 @@ the figure are written whole or not at all, after every point has finished.
 from __future__ import annotations
 
 import math
-import sys
 from pathlib import Path
 
 from ..errors import ConfigFileError
@@ -137,7 +136,8 @@ def run(args) -> int:
     Returns
     -------
     int
-        0 on success, 130 when interrupted (finished points stay cached).
+        0 on success; Ctrl-C ends in :func:`kilnctl.cli.main` with 130 (finished points stay
+        cached).
     """
     from ..sweep import load_spec
 
@@ -152,13 +152,9 @@ def run(args) -> int:
     from ..figures import save_figure
 
     cache = None if args.no_cache else args.cache
-    try:
-        result = run_sweep(study, args.executor, workers=args.workers, cache=cache, progress=not args.quiet)
-    except KeyboardInterrupt:
-        print(f"kilnctl sweep: interrupted; nothing written"
-              + ("" if cache is None else f", finished points kept in {cache}: run again to resume"),
-              file=sys.stderr)
-        return 130
+    # Ctrl-C: run_sweep ends the workers and raises SweepInterrupted, which kilnctl.cli.main prints as one
+    # line (how many points are cached) with exit code 130
+    result = run_sweep(study, args.executor, workers=args.workers, cache=cache, progress=not args.quiet)
     if args.out:
         result.save(args.out)
     if args.plot:

@@ -19,7 +19,7 @@ Command line: ``kilnctl sweep SPEC.toml`` (format in :mod:`kilnctl.sweep.spec`).
 Needs the optional dependencies: ``pip install 'kilnctl[sweep]'``.
 """
 
-from .engine import EXECUTORS, PointCache, run_point, run_sweep
+from .engine import EXECUTORS, PointCache, SweepInterrupted, run_point, run_sweep
 from .limits import GIRTH_GEAR_HARDNESS_HB, allowable_bending_stress
 from .result import SweepResult, wilson_interval
 from .space import DISTRIBUTIONS, Grid, LatinHypercube, LogUniform, MonteCarlo, Normal, Triangular, TruncNormal, Uniform
@@ -30,6 +30,6 @@ __all__ = [
     "Study", "run_sweep", "SweepResult", "Grid", "LatinHypercube", "MonteCarlo",
     "Uniform", "LogUniform", "Normal", "TruncNormal", "Triangular", "DISTRIBUTIONS",
     "load_spec", "study_from_dict", "SpecError", "METHODS", "OUTPUTS", "SIM_OPTIONS", "EXECUTORS",
-    "PointCache", "run_point", "wilson_interval", "code_fingerprint",
+    "PointCache", "run_point", "SweepInterrupted", "wilson_interval", "code_fingerprint",
     "allowable_bending_stress", "GIRTH_GEAR_HARDNESS_HB",
 ]

@@ -10,10 +10,12 @@ so the same study gives the same table on any executor.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import signal
 import sys
+import threading
 import time
 from concurrent.futures import Future, ProcessPoolExecutor
 from concurrent.futures import as_completed as _local_as_completed
@@ -23,7 +25,14 @@ from ..errors import KilnctlError, ParameterError
 from ..files import write_atomic
 from ..simulate import simulate
 
-__all__ = ["run_sweep", "run_point", "PointCache", "EXECUTORS"]
+__all__ = ["run_sweep", "run_point", "PointCache", "EXECUTORS", "SweepInterrupted"]
+
+
+class SweepInterrupted(KeyboardInterrupt):
+    """Ctrl-C stopped a sweep: the workers are ended; the message says how many points are cached.
+
+    A :class:`KeyboardInterrupt`, so code that catches that keeps working.
+    """
 
 #: executor names accepted besides ``dask://HOST:PORT`` and a ``distributed.Client``
 EXECUTORS = ("local", "serial")
@@ -107,6 +116,19 @@ def _init_worker() -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
+@contextlib.contextmanager
+def _sigint_ignored():
+    """Ignore SIGINT in this block (main thread only; elsewhere a no-op), then restore the handler."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
 class _Lazy(Future):
     """A future run in this process when its result is first asked for (the 'serial' executor)."""
 
@@ -147,13 +169,30 @@ class _Local:
                                         initializer=_init_worker)
 
     def submit(self, task):
-        return self.pool.submit(run_point, task)
+        # the pool starts its workers inside submit; they start with Ctrl-C ignored (an ignored signal stays
+        # ignored across exec), so a Ctrl-C while one is importing cannot print a worker traceback
+        with _sigint_ignored():
+            return self.pool.submit(run_point, task)
 
     def as_completed(self, futures):
         return _local_as_completed(futures)
 
     def close(self, futures, cancel: bool):
-        self.pool.shutdown(wait=True, cancel_futures=cancel)
+        if not cancel:
+            self.pool.shutdown(wait=True)
+            return
+        # interrupted: end the workers now rather than wait for their running points (a point can take
+        # minutes, and the pool's shutdown could wait on a worker forever). The pool keeps its processes
+        # in a private dict; Python 3.14 has ProcessPoolExecutor.terminate_workers for this.
+        procs = list((getattr(self.pool, "_processes", None) or {}).values())
+        self.pool.shutdown(wait=False, cancel_futures=True)
+        for proc in procs:
+            proc.terminate()
+        for proc in procs:
+            proc.join(timeout=5)
+            if proc.is_alive():
+                proc.kill()
+                proc.join(timeout=5)
 
 
 class _Dask:
@@ -245,8 +284,9 @@ def run_sweep(study, executor=None, *, workers: int | None = None, cache=None, p
     ------
     ParameterError
         Impossible points (before anything runs) or a bad executor.
-    KeyboardInterrupt
-        Passed on after the pool is shut down; the finished points stay cached.
+    SweepInterrupted
+        (a :class:`KeyboardInterrupt`) on Ctrl-C, after the worker processes
+        are ended; the finished points stay cached.
     """
     from .result import SweepResult
 
@@ -279,11 +319,14 @@ def run_sweep(study, executor=None, *, workers: int | None = None, cache=None, p
                     if store is not None:
                         store.put(rec)
                     bar.update()
+        except KeyboardInterrupt:
+            backend.close(futures, cancel=True)
+            done = sum(t["key"] in records for t in tasks)
+            raise SweepInterrupted(
+                "nothing written" + (f"; {done} of {len(tasks)} points are in the cache {store.directory}: "
+                                     "run again to resume" if store is not None else "")) from None
         except BaseException:
             backend.close(futures, cancel=True)
-            if store is not None and progress:
-                print(f"{study.name}: stopped; {len(records)} of {len(tasks)} points are in the cache "
-                      f"{store.directory}: run again to resume", file=sys.stderr)
             raise
         backend.close(futures, cancel=False)
     info = {

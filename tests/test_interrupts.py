@@ -1,0 +1,129 @@
+"""Ctrl-C, tested with a real SIGINT sent to a `kilnctl` subprocess.
+
+Independent truth: the operating system. The exit status is what the process returned, the
+worker processes are looked up in /proc (children of the kilnctl process, found before the
+signal), and the files are what is on disk afterwards.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+pytestmark = pytest.mark.skipif(not Path("/proc/self/stat").exists() or os.name != "posix",
+                                reason="needs POSIX signals and /proc")
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _start(args, cwd):
+    env = dict(os.environ, PYTHONPATH=str(ROOT), MPLBACKEND="Agg")
+    return subprocess.Popen([sys.executable, "-m", "kilnctl.cli", *args], cwd=cwd, env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def _children(pid: int) -> list[int]:
+    out = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if int(fields[1]) == pid:
+            out.append(int(stat.parent.name))
+    return out
+
+
+def _alive(pid: int) -> bool:
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except OSError:
+        return False
+    return state != "Z"
+
+
+def _wait_for(cond, timeout=60.0):
+    t0 = time.monotonic()
+    while not cond():
+        if time.monotonic() - t0 > timeout:
+            raise AssertionError("condition not reached in time")
+        time.sleep(0.05)
+
+
+def _wait_mapped(proc, lib: str):
+    """Wait until the process has loaded ``lib`` (then it runs inside kilnctl.cli.main, past the imports)."""
+    maps = Path(f"/proc/{proc.pid}/maps")
+    _wait_for(lambda: proc.poll() is not None or lib in maps.read_text())
+    assert proc.poll() is None, proc.communicate()
+
+
+def test_simulate_ctrl_c_is_one_line_and_exit_130(tmp_path):
+    out = tmp_path / "run.csv"
+    proc = _start(["simulate", "--model", "micro", "--t-end", "900", "--csv", str(out)], tmp_path)
+    _wait_mapped(proc, "casadi")
+    time.sleep(0.3)
+    proc.send_signal(signal.SIGINT)
+    stdout, stderr = proc.communicate(timeout=30)
+    assert proc.returncode == 130, stderr
+    assert stderr.strip() in ("kilnctl simulate: interrupted", "kilnctl: interrupted")
+    assert "Traceback" not in stderr and stdout == ""
+    assert list(tmp_path.iterdir()) == []  # no CSV, no temporary file left behind
+
+
+# given gains (those the design gives for Table 1): no design in the parent, so the pool starts at once
+SPEC = ('model = "micro"\nt_end = 30.0\n[base]\ngains = "given"\nk_p = 0.08478\nk_I = 2.168\nk_D = 0.01419\n'
+        '[parameters.m_v]\nmin = 3e5\nmax = 9e5\nnum = 40\n')
+
+
+def _workers(pid: int) -> list[int]:
+    """Worker processes of the sweep's pool (children started by multiprocessing's spawn)."""
+    out = []
+    for child in _children(pid):
+        try:
+            if b"spawn_main" in Path(f"/proc/{child}/cmdline").read_bytes():
+                out.append(child)
+        except OSError:
+            pass
+    return out
+
+
+def _sweep_with_workers_running(tmp_path):
+    (tmp_path / "s.toml").write_text(SPEC)
+    proc = _start(["sweep", "s.toml", "--workers", "2", "--cache", "cache", "--out", "r.csv"], tmp_path)
+    _wait_for(lambda: proc.poll() is not None or len(_workers(proc.pid)) == 2)
+    time.sleep(0.5)  # the workers are importing kilnctl or running their first points
+    assert proc.poll() is None, proc.communicate()
+    return proc, _children(proc.pid)  # the workers and the pool's resource tracker
+
+
+def test_sweep_ctrl_c_ends_the_workers_and_keeps_the_cache(tmp_path):
+    proc, workers = _sweep_with_workers_running(tmp_path)
+    t0 = time.monotonic()
+    proc.send_signal(signal.SIGINT)
+    _, stderr = proc.communicate(timeout=30)
+    assert time.monotonic() - t0 < 10  # does not wait for the running points
+    assert proc.returncode == 130
+    last = stderr.replace("\r", "\n").strip().splitlines()[-1]
+    assert last.startswith("kilnctl sweep: interrupted; nothing written; ") and "run again to resume" in last
+    assert len(last.splitlines()) == 1
+    assert "Traceback" not in stderr
+    _wait_for(lambda: not any(_alive(w) for w in workers), timeout=10)
+    assert not (tmp_path / "r.csv").exists()
+    assert not list(tmp_path.glob(".tmp-*"))
+
+
+def test_second_ctrl_c_ends_at_once(tmp_path):
+    proc, workers = _sweep_with_workers_running(tmp_path)
+    proc.send_signal(signal.SIGINT)
+    proc.send_signal(signal.SIGINT)
+    _, stderr = proc.communicate(timeout=30)
+    assert proc.returncode == 130
+    assert "Traceback" not in stderr
+    _wait_for(lambda: not any(_alive(w) for w in workers), timeout=10)
+    assert not (tmp_path / "r.csv").exists()
