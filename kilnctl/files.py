@@ -1,4 +1,4 @@
-"""Writing files whole or not at all.
+"""Writing files whole or not at all, and reading TOML input with clear errors.
 
 kilnctl never leaves a half-written output: it writes to a temporary file in
 the destination folder and renames it over the destination in one step.
@@ -9,9 +9,15 @@ from __future__ import annotations
 import contextlib
 import os
 import tempfile
+import tomllib
 from pathlib import Path
 
-__all__ = ["write_atomic", "atomic_path"]
+from .errors import ConfigFileError
+
+__all__ = ["write_atomic", "atomic_path", "read_toml"]
+
+#: the UTF-8 byte-order mark some editors put at the start of a file
+_BOM = "\ufeff"
 
 
 @contextlib.contextmanager
@@ -61,3 +67,48 @@ def write_atomic(path, data: bytes | str) -> Path:
     with atomic_path(path) as tmp:
         tmp.write_bytes(data.encode() if isinstance(data, str) else data)
     return Path(path)
+
+
+def read_toml(path, kind: str = "configuration file", error: type = ConfigFileError) -> dict:
+    """Read a TOML file; every way it can fail is an ``error`` naming the file and the fix.
+
+    Parameters
+    ----------
+    path : path-like
+        The file.
+    kind : str, default 'configuration file'
+        What the file is, for the messages (``sweep spec``, ``setup file`` ...).
+    error : type, default ConfigFileError
+        Exception class raised (a :class:`~kilnctl.errors.ConfigFileError`).
+
+    Returns
+    -------
+    dict
+        The parsed document.
+
+    Raises
+    ------
+    ConfigFileError
+        Missing file, a folder, unreadable, not UTF-8, a UTF-8 byte-order
+        mark, or not TOML (with the line and column).
+    """
+    path = Path(path)
+    try:
+        data = path.read_bytes()
+    except FileNotFoundError:
+        raise error(f"{path}: no such {kind}") from None
+    except IsADirectoryError:
+        raise error(f"{path} is a folder, not a {kind}: give the file itself") from None
+    except OSError as exc:
+        raise error(f"{path}: cannot read the {kind} ({exc.strerror or exc})") from None
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise error(f"{path}: the {kind} is not UTF-8 text (byte {exc.start}); save it as UTF-8") from None
+    if text.startswith(_BOM):
+        raise error(f"{path}: the {kind} starts with a UTF-8 byte-order mark (BOM), which TOML does not allow; "
+                    "save it as UTF-8 without BOM (in Notepad: 'UTF-8', not 'UTF-8 with BOM')")
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise error(f"{path}: not a valid TOML {kind} ({exc}); see docs/quickstart.md for the format") from None

@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import math
 import os
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Iterator, Mapping
@@ -30,9 +29,10 @@ from typing import Any, Iterator, Mapping
 import tomli_w
 
 from .errors import ConfigFileError, ParameterError, close_matches_hint
-from .files import write_atomic
+from .files import read_toml, write_atomic
 
-__all__ = ["ParamSpec", "Parameters", "SPECS", "GROUPS"]
+__all__ = ["ParamSpec", "Parameters", "SPECS", "GROUPS", "Implausible", "plausibility", "check_plausible",
+           "HARD_FACTOR", "SLIP_FACTOR"]
 
 #: rules a numeric value may be held to
 _RULES = {
@@ -196,6 +196,135 @@ SPECS: dict[str, ParamSpec] = {s.name: s for s in _SPEC_LIST}
 GROUPS: tuple[str, ...] = ("motor", "controller", "drive", "kiln", "gear", "coupling", "effects")
 
 
+# --- plausibility: values that are valid numbers but not a kiln drive ------------------------------
+#: a value this many times above or below its default (Table 1 or the documented assumption) is refused:
+#: no kiln drive is that far off, and the models' arithmetic overflows (R_a = 1e300 gave non-finite matrices)
+HARD_FACTOR = 1e9
+#: a mass, inertia, weight or length this many times above or below its default is almost surely a unit
+#: slip (tonnes for kg, mm for m): a warning, an error with ``strict``
+SLIP_FACTOR = 300.0
+#: units whose slips come in factors of 1000 (kg <-> t, m <-> mm, N <-> kN)
+_SLIP_UNITS = ("kg", "kg*m^2", "N", "m")
+#: coefficients of friction: above 1 is almost surely a percentage
+_FRICTION = ("mu_c", "mu_s", "mu_brg")
+
+
+def _check_magnitude(spec: ParamSpec, v: float) -> None:
+    d = spec.default
+    if spec.is_option or not isinstance(d, float) or d == 0 or v == 0:
+        return
+    ratio = abs(v / d)
+    if not 1 / HARD_FACTOR <= ratio <= HARD_FACTOR:
+        raise ParameterError(
+            f"parameter {spec.name!r} = {v!r} {spec.unit} is {ratio:.3g} times its default {d:g} {spec.unit} "
+            f"({spec.source}): no kiln drive is that far off (the limit is a factor of {HARD_FACTOR:g}); check "
+            f"the value and its unit ({spec.description}, in {spec.unit})")
+
+
+@dataclass(frozen=True)
+class Implausible:
+    """A value that is valid but almost surely a slip (a unit, a percentage).
+
+    Attributes
+    ----------
+    name : str
+        Parameter name.
+    value : float
+        The value given (in the parameter's unit).
+    likely : float
+        The value probably meant (same unit).
+    message : str
+        The warning, in words, with the likely value.
+    """
+
+    name: str
+    value: float
+    likely: float
+    message: str
+
+
+def plausibility(params: "Parameters") -> list[Implausible]:
+    """Return the values of a parameter set that are valid but almost surely a slip.
+
+    Rules: a coefficient of friction above 1 (a percentage: the likely value
+    is a hundredth), and a mass, inertia, weight or length at least
+    :data:`SLIP_FACTOR` times above or below its default (Table 1 or the
+    documented assumption; the likely value is a thousandth or a thousand
+    times), e.g. a backlash of 8 given in metres meant as millimetres.
+
+    Parameters
+    ----------
+    params : Parameters
+        The parameter set.
+
+    Returns
+    -------
+    list of Implausible
+        In declaration order; empty when nothing looks wrong.
+    """
+    out = []
+    for spec in _SPEC_LIST:
+        v = params[spec.name]
+        if spec.is_option or v == 0:
+            continue
+        if spec.name in _FRICTION:
+            if v > 1:
+                likely = v / 100
+                out.append(Implausible(spec.name, v, likely, (
+                    f"{spec.name} = {v:g} is a coefficient of friction above 1 (a {spec.description}): was it "
+                    f"given in percent? {v:g} % is {spec.name} = {likely:g}")))
+            continue
+        d = spec.default
+        if spec.unit not in _SLIP_UNITS or not isinstance(d, float) or d == 0:
+            continue
+        ratio = v / d
+        if ratio >= SLIP_FACTOR or ratio <= 1 / SLIP_FACTOR:
+            likely = v / 1000 if ratio > 1 else v * 1000
+            thousand = {"kg": "t", "kg*m^2": "t*m^2", "N": "kN"}  # the unit a thousand times larger
+            if spec.unit == "m" and ratio > 1:
+                slip = "given in mm instead of m"
+            elif spec.unit in thousand and ratio < 1:
+                slip = f"given in {thousand[spec.unit]} instead of {spec.unit}"
+            else:
+                slip = "a factor of 1000 too " + ("large" if ratio > 1 else "small")
+            out.append(Implausible(spec.name, v, likely, (
+                f"{spec.name} = {v:g} {spec.unit} is {ratio:.3g} times its default {d:g} {spec.unit} "
+                f"({spec.source}; {spec.description}): {slip}? The likely value is {spec.name} = {likely:g} "
+                f"{spec.unit}")))
+    return out
+
+
+def check_plausible(params: "Parameters", strict: bool = False, where: str = "") -> list[str]:
+    """Return the plausibility warnings of a parameter set, or raise them with ``strict``.
+
+    Parameters
+    ----------
+    params : Parameters
+        The parameter set.
+    strict : bool, default False
+        Raise instead of returning warnings.
+    where : str, optional
+        The file the values come from, put before each message.
+
+    Returns
+    -------
+    list of str
+        One message per implausible value (see :func:`plausibility`).
+
+    Raises
+    ------
+    ParameterError
+        With ``strict``, when any value is implausible (all messages, and how
+        to accept them: leave out ``--strict``).
+    """
+    prefix = f"{where}: " if where else ""
+    msgs = [prefix + w.message for w in plausibility(params)]
+    if msgs and strict:
+        raise ParameterError("; ".join(msgs) + " (refused because of --strict / strict=True; without it these "
+                             "are warnings)")
+    return msgs
+
+
 def _check_value(spec: ParamSpec, value: Any) -> float | str:
     if spec.is_option:
         if not isinstance(value, str) or value not in spec.choices:
@@ -212,6 +341,7 @@ def _check_value(spec: ParamSpec, value: Any) -> float | str:
     ok, rule = _RULES[spec.rule]
     if not ok(v):
         raise ParameterError(f"parameter {spec.name!r} = {v!r} {rule} ({spec.description}, {spec.unit})")
+    _check_magnitude(spec, v)
     return v
 
 
@@ -263,6 +393,12 @@ class Parameters(Mapping):
             raise ParameterError(
                 f"parameter 'n' = {merged['n']} must exceed the girth-gear ratio R_o/R_p = "
                 f"{merged['R_o'] / merged['R_p']:.4g}: the gearbox ratio n/n_p would be below 1")
+        pitch = math.pi * merged["module"]
+        if merged["delta_x"] >= pitch:
+            raise ParameterError(
+                f"parameter 'delta_x' = {merged['delta_x']!r} m (backlash) is not below the circular pitch "
+                f"pi * module = {pitch:.4g} m: the teeth could not mesh. Backlash is in metres: "
+                f"{merged['delta_x']:g} mm is delta_x = {merged['delta_x'] / 1000:g}")
         object.__setattr__(self, "_values", merged)
 
     # --- mapping protocol ---------------------------------------------------
@@ -425,17 +561,13 @@ class Parameters(Mapping):
         Raises
         ------
         ConfigFileError
-            The file is missing, not TOML, or has an unknown section.
+            The file is missing, a folder, not UTF-8 TOML (a byte-order mark
+            is named as such), or has an unknown section.
         ParameterError
             A key is unknown or a value impossible; the message names the file.
         """
         path = Path(path)
-        try:
-            raw = tomllib.loads(path.read_text())
-        except FileNotFoundError:
-            raise ConfigFileError(f"{path}: no such configuration file") from None
-        except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-            raise ConfigFileError(f"{path}: not a valid TOML file ({exc})") from None
+        raw = read_toml(path, "configuration file")
         flat: dict[str, Any] = {}
         for key, value in raw.items():
             if isinstance(value, dict):

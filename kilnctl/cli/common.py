@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
-from ..params import Parameters
+import sys
+
+from ..params import Parameters, check_plausible
 
 
 def add_config_arg(parser) -> None:
@@ -13,6 +15,36 @@ def add_config_arg(parser) -> None:
     parser : argparse.ArgumentParser
     """
     parser.add_argument("--config", metavar="FILE", help="TOML parameter file (defaults: the paper's Table 1)")
+    add_strict_arg(parser)
+
+
+def add_strict_arg(parser) -> None:
+    """Add the ``--strict`` option: implausible parameter values are errors, not warnings.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+    """
+    parser.add_argument("--strict", action="store_true",
+                        help="refuse parameter values that are valid but almost surely a unit slip (a backlash "
+                             "in mm given as m, a friction coefficient in percent, a mass in tonnes); without "
+                             "it they are warnings")
+
+
+def warn_implausible(params: Parameters, args, where: str = "") -> None:
+    """Print one warning line per implausible value (or raise with ``--strict``).
+
+    Parameters
+    ----------
+    params : Parameters
+        The parameter set the command will use.
+    args : argparse.Namespace
+        Parsed arguments (``command``, ``strict``).
+    where : str, optional
+        The file the values come from.
+    """
+    for msg in check_plausible(params, strict=getattr(args, "strict", False), where=where):
+        print(f"kilnctl {args.command}: warning: {msg} (--strict makes this an error)", file=sys.stderr)
 
 
 def load_params(args) -> Parameters:
@@ -26,5 +58,30 @@ def load_params(args) -> Parameters:
     Returns
     -------
     Parameters
+        Implausible values are printed as warnings, or refused with ``--strict``.
     """
-    return Parameters.from_toml(args.config) if getattr(args, "config", None) else Parameters()
+    config = getattr(args, "config", None)
+    params = Parameters.from_toml(config) if config else Parameters()
+    warn_implausible(params, args, where=config or "")
+    return params
+
+
+def check_report_dir(args) -> None:
+    """Refuse a ``--report`` path that is a file (or the data or config file), before any work.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        Parsed arguments with ``report``, ``data`` and ``config``.
+    """
+    from pathlib import Path
+
+    from ..errors import ConfigFileError
+
+    rep = Path(args.report)
+    for flag, given in (("--data", args.data), ("--config", args.config)):
+        if given and rep.exists() and Path(given).exists() and rep.resolve() == Path(given).resolve():
+            raise ConfigFileError(f"--report {rep} is the {flag} file: give a folder for the report files")
+    if rep.exists() and not rep.is_dir():
+        raise ConfigFileError(f"--report {rep} is a file, not a folder: give a folder (created if missing) for "
+                              "the report files (HTML, JSON, figures)")

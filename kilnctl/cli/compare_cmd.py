@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from ..errors import ConfigFileError
 from . import print_json
+from .common import add_strict_arg, check_report_dir, warn_implausible
 
 __all__ = ["register", "run"]
 
@@ -32,6 +33,7 @@ def register(sub) -> None:
     p.add_argument("--columns", metavar="MAP", help="the record's own column names, e.g. "
                    "current_A=I_arm,speed_rpm=n_mot,time_s=t; units in the header or here ('time_s=t [ms]') are "
                    "converted (default: the setup's [measurement] columns)")
+    add_strict_arg(p)
     p.add_argument("--config", metavar="FILE", help="setup of the experiment (kilnctl TOML parameter file, "
                    "optional [measurement] section); default: the paper's Table 1")
     p.add_argument("--model", choices=("macro", "micro"), default="macro", help="model to compare (default macro)")
@@ -81,7 +83,10 @@ def run(args) -> int:
     from ..measure.io import load_setup, read_record, record_columns
     from ..measure.compare import compare
 
+    if args.report:
+        check_report_dir(args)
     setup = load_setup(args.config)
+    warn_implausible(setup.params, args, where=args.config or "")
     names = parse_names(args.effects)
     effects, params = effect_components(names, setup.params, model=args.model)
     data = read_record(args.data, setup.params, record_columns(setup, args.columns))

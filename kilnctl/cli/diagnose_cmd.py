@@ -12,6 +12,7 @@ from __future__ import annotations
 import sys
 
 from . import print_json
+from .common import add_strict_arg, check_report_dir, warn_implausible
 from .compare_cmd import parse_names
 
 __all__ = ["register", "run"]
@@ -35,6 +36,7 @@ def register(sub) -> None:
     p.add_argument("--columns", metavar="MAP", help="the record's own column names, e.g. "
                    "current_A=I_arm,speed_rpm=n_mot,time_s=t; units in the header or here ('time_s=t [ms]') are "
                    "converted (default: the setup's [measurement] columns)")
+    add_strict_arg(p)
     p.add_argument("--config", metavar="FILE", help="setup of the experiment (kilnctl TOML parameter file with an "
                    "optional [measurement] section); default: the paper's Table 1")
     p.add_argument("--model", choices=("macro", "micro"), default="macro", help="base model (default macro)")
@@ -66,7 +68,10 @@ def run(args) -> int:
     from ..measure.diagnose import DEFAULT_CALIBRATE, Diagnosis
     from ..measure.io import load_setup, read_record, record_columns
 
+    if args.report:
+        check_report_dir(args)  # before the diagnosis, which takes tens of seconds
     setup = load_setup(args.config)
+    warn_implausible(setup.params, args, where=args.config or "")
     calibrate = (parse_names(args.calibrate, "--calibrate") if args.calibrate
                  else tuple(setup.options.get("calibrate", DEFAULT_CALIBRATE)))
     candidates = (parse_names(args.candidates, "--candidates") if args.candidates

@@ -12,8 +12,9 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from ..errors import ConfigFileError
+from ..errors import ConfigFileError, KilnctlError
 from . import print_json
+from .common import add_strict_arg, warn_implausible
 
 #: default folder of finished points, relative to the current folder
 DEFAULT_CACHE = Path(".kilnctl_cache") / "sweep"
@@ -50,6 +51,7 @@ def register(sub) -> None:
     p.add_argument("--max-points", type=int, default=None, metavar="N",
                    help="largest number of points, checked before any is built (default 100000, or the "
                         "environment variable KILNCTL_MAX_POINTS)")
+    add_strict_arg(p)
     p.add_argument("--dry-run", action="store_true", help="check the spec and list the study; simulate nothing")
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -143,7 +145,11 @@ def run(args) -> int:
 
     _check_outputs(args)
     study = load_spec(args.spec, max_points=args.max_points)
-    study.parameter_sets()  # every point is checked before anything runs
+    warn_implausible(study.base, args, where=f"{args.spec} (base of the sweep)")
+    try:
+        study.parameter_sets()  # every point is checked before anything runs
+    except KilnctlError as exc:
+        raise type(exc)(f"{args.spec}: {exc}") from None
     threshold = threshold_si(study.outputs[0], args.threshold)
     if args.dry_run:
         print(study.describe())

@@ -48,11 +48,11 @@ Examples
 
 from __future__ import annotations
 
-import tomllib
 from pathlib import Path
 from typing import Any, Mapping
 
 from ..budget import check_points
+from ..files import read_toml
 from ..errors import ConfigFileError, KilnctlError, ParameterError, close_matches_hint
 from ..params import Parameters
 from .space import DISTRIBUTIONS, Grid, LatinHypercube, LogUniform, MonteCarlo, Uniform
@@ -161,6 +161,7 @@ def study_from_dict(spec: Mapping[str, Any], base_dir: str | Path = ".", name: s
         Unknown parameters, outputs or components (with close matches).
     """
     _unknown(spec, _TOP, "spec")
+    _check_types(spec)
     method = spec.get("method", "grid")
     if method not in METHODS:
         raise SpecError(f"method = {method!r} is not a sampling method: {close_matches_hint(str(method), METHODS)} "
@@ -213,6 +214,23 @@ def study_from_dict(spec: Mapping[str, Any], base_dir: str | Path = ".", name: s
                  max_points=max_points)
 
 
+#: top-level keys that must be text, or lists of text
+_TEXT_KEYS = ("name", "model", "method", "config")
+_LIST_KEYS = ("outputs", "effects", "remove")
+
+
+def _check_types(spec: Mapping[str, Any]) -> None:
+    for k in _TEXT_KEYS:
+        if k in spec and not isinstance(spec[k], str):
+            raise SpecError(f"{k} = {spec[k]!r} must be text in quotes, e.g. {k} = \"...\"")
+    for k in _LIST_KEYS:
+        v = spec.get(k)
+        if v is None or (k == "outputs" and isinstance(v, str)):
+            continue
+        if not isinstance(v, list) or not all(isinstance(x, str) for x in v):
+            raise SpecError(f"{k} = {v!r} must be a list of names in quotes, e.g. {k} = [\"...\"]")
+
+
 def _flag(spec, key: str) -> bool:
     v = spec.get(key, False)
     if not isinstance(v, bool):
@@ -243,14 +261,7 @@ def load_spec(path: str | Path, max_points: int | None = None) -> Study:
         Unknown names or impossible values, also prefixed with the file name.
     """
     path = Path(path)
-    try:
-        raw = tomllib.loads(path.read_text())
-    except FileNotFoundError:
-        raise SpecError(f"{path}: no such sweep spec") from None
-    except IsADirectoryError:
-        raise SpecError(f"{path} is a folder: give the spec file") from None
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise SpecError(f"{path}: not a valid TOML file ({exc})") from None
+    raw = read_toml(path, "sweep spec", SpecError)
     try:
         return study_from_dict(raw, base_dir=path.parent, name=path.stem, max_points=max_points)
     except KilnctlError as exc:
