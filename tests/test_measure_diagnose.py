@@ -26,6 +26,7 @@ def second_motor_case():
     return m, truth, Diagnosis(SETUP, candidates=FEW).fit(m)
 
 
+@pytest.mark.slow  # the shared second-motor diagnosis takes about 40 s; test_diagnose_cli_json covers diagnose in the fast tier
 def test_hidden_second_motor_is_found_and_its_inertia_recovered(second_motor_case):
     m, truth, d = second_motor_case
     assert d.selected_ == ["second_motor"]
@@ -36,6 +37,7 @@ def test_hidden_second_motor_is_found_and_its_inertia_recovered(second_motor_cas
     assert "current fit rose from" in d.headline() and "J_m2" in d.headline()
 
 
+@pytest.mark.slow  # the shared second-motor diagnosis takes about 40 s; test_diagnose_cli_json covers diagnose in the fast tier
 def test_json_has_the_documented_keys(second_motor_case):
     _, _, d = second_motor_case
     out = json.loads(json.dumps(d.to_dict(), allow_nan=False))
@@ -47,6 +49,7 @@ def test_json_has_the_documented_keys(second_motor_case):
     assert r["parameters"]["J_m2"]["stderr"] is not None
 
 
+@pytest.mark.slow  # the shared second-motor diagnosis takes about 40 s; test_diagnose_cli_json covers diagnose in the fast tier
 def test_report_is_one_self_contained_page(second_motor_case, tmp_path):
     _, _, d = second_motor_case
     files = d.report(tmp_path / "rep")
@@ -102,6 +105,7 @@ def test_diagnose_cli_json(tmp_path, capsys):
     assert out["final_parameters"]["B_o"]["value"] == pytest.approx(6e6, rel=0.10)
 
 
+@pytest.mark.slow  # about 40 s (micro model calibration)
 def test_backlash_impact_is_located_to_a_fraction_of_a_millimetre():
     # truth: the plant is the micro model with a 9.5 mm gap, half-way between two points of the 80-point start
     # grid.  The impact is a spike one sample long, so the cost in delta_x is a valley 0.3 mm wide: found only
@@ -145,6 +149,7 @@ def test_a_candidate_whose_gain_is_a_better_base_fit_is_not_supported():
     assert not results[0].supported
 
 
+@pytest.mark.slow  # about 15 s
 def test_unbalance_in_a_record_shorter_than_a_revolution_comes_with_a_caution():
     # truth: the plant has an unbalance of 3e5 N m; the record (20 s) is a sixth of a kiln revolution
     # (60 n / omega_ref = 129 s with Table 1), where the unbalance is a slow drift a sensor offset also makes
@@ -230,6 +235,7 @@ def test_every_periodic_catalogue_effect_says_what_else_makes_its_signature():
             assert eff.short_record_note and not eff.short_record_note.endswith(".")
 
 
+@pytest.mark.slow  # needs the shared second-motor diagnosis (about 40 s)
 def test_report_reads_without_statistics_and_loads_in_a_browser(second_motor_case, tmp_path, load_in_chromium):
     _, _, d = second_motor_case
     d.report(tmp_path / "page")

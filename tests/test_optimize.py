@@ -167,6 +167,7 @@ def test_optimum_on_a_reduced_problem_matches_brute_force_on_the_hybrid_plant():
                                                                      rel=0.01)
 
 
+@pytest.mark.slow  # about 25 s (two transcriptions solved)
 def test_single_and_multiple_shooting_agree():
     prob = RampProblem(P, profile="constant", t_max=3.0, horizon=3.5, objective="dynamic")
     stage = (Stage(smooth_ds=1e-5, smooth_v=1e-3, ramp_corner=0.2, beta=100.0),)
@@ -176,6 +177,7 @@ def test_single_and_multiple_shooting_agree():
     assert b.stages[-1].objective == pytest.approx(a.stages[-1].objective, rel=1e-5)
 
 
+@pytest.mark.slow  # about 16 s (IPOPT proves infeasibility)
 def test_infeasible_requests_raise_with_status_and_constraint():
     # no ramp within the bounds reaches 95 % of 500 rpm in 0.1 s
     with pytest.raises(RampSolveError, match="infeasible") as e:
