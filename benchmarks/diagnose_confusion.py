@@ -175,14 +175,18 @@ def _oracle(m, setup, truth, calibrate, max_nfev):
     init = {k: v for k, v in truth["base"].items() if k in calibrate}
     init.update(truth["catalogue_values"])
     t0 = time.perf_counter()
-    cal = Calibration(p, free, model=model, effects=comps, max_nfev=max_nfev).fit(m, init=init)
+    try:
+        cal = Calibration(p, free, model=model, effects=comps, max_nfev=max_nfev)
+    except TypeError:  # a Calibration that sets its own evaluation budget
+        cal = Calibration(p, free, model=model, effects=comps)
+    cal.fit(m, init=init)
     return float(cal.fit_percent_["current_A"]), dict(cal.values_), time.perf_counter() - t0
 
 
 def _hard_one(job):
     """Make one record, write it, read it back, diagnose it and fit its true structure (runs in a worker)."""
     os.environ.setdefault("MPLBACKEND", "Agg")
-    from benchmarks.diagnose_records import find, visibility, write
+    from benchmarks.diagnose_records import NUISANCE, find, visibility, write
     from kilnctl import Parameters
     from kilnctl.measure import read_csv
     from kilnctl.measure.diagnose import Diagnosis
@@ -199,7 +203,12 @@ def _hard_one(job):
     wall = time.perf_counter() - t0
     selected = list(d.selected_)
     found = dict(getattr(d.final_calibration_, "values_", {}))
-    true_fit, oracle_values, oracle_wall = _oracle(m, setup, truth, d.calibrate, d.max_nfev)
+    try:
+        true_fit, oracle_values, oracle_wall = _oracle(m, setup, truth, tuple(getattr(d, "calibrate", NUISANCE)),
+                                                       getattr(d, "max_nfev", 60))
+        oracle_error = None
+    except Exception as exc:  # noqa: BLE001 - the record still counts, as a miss on the fit targets
+        true_fit, oracle_values, oracle_wall, oracle_error = float("nan"), {}, float("nan"), f"{type(exc).__name__}: {exc}"
     unexpl = getattr(d, "unexplained_", None)
     expected = list(truth["expected"])
     rel = {k: abs(found[k] - v) / abs(v) for k, v in truth["catalogue_values"].items()
@@ -215,7 +224,7 @@ def _hard_one(job):
             "baseline_fit": float(d.baseline_["current_A"]), "final_fit": float(d.final_["current_A"]),
             "true_fit": true_fit, "dfit": float(d.final_["current_A"]) - true_fit,
             "values": _clean(found), "oracle_values": _clean(oracle_values), "param_rel_err": _clean(rel),
-            "truth": truth, "wall_s": wall, "oracle_wall_s": oracle_wall}
+            "truth": truth, "wall_s": wall, "oracle_wall_s": oracle_wall, "oracle_error": oracle_error}
 
 
 def _save(path, results, meta):
@@ -225,15 +234,21 @@ def _save(path, results, meta):
     os.replace(tmp, path)
 
 
+#: short effect names for the table (the JSON keeps the catalogue's names)
+SHORT = {"second_motor": "motor2", "current_limit": "I_limit", "drivetrain_compliance": "compliance",
+         "backlash": "backlash", "torque_friction_law": "torque_law", "speed_sensor_lag": "sensor_lag",
+         "kiln_unbalance": "unbalance", "viscous_drag": "drag"}
+
+
 def _line(r) -> str:
     if "error" in r:
         return f"{r['name'][:46]:<47}FAILED: {r['error'][:120]}"
     ok = "ok " if r["exact"] else "MISS"
     if r["class"] == "outside":
         ok = "ok " if (r["unexplained"] and not r["selected"]) else "MISS"
-    sel = ", ".join(r["selected"]) or "-"
-    exp = ", ".join(e + ("?" if e in r.get("invisible", ()) else "") for e in r["expected"]) or "-"
-    return (f"{r['name'][:46]:<47}{exp[:40]:<41}{sel[:40]:<41}{ok:<5}{'yes' if r['unexplained'] else '-':<4}"
+    sel = ",".join(SHORT.get(e, e) for e in r["selected"]) or "-"
+    exp = ",".join(SHORT.get(e, e) + ("?" if e in r.get("invisible", ()) else "") for e in r["expected"]) or "-"
+    return (f"{r['name'][:46]:<47}{exp[:32]:<33}{sel[:43]:<44}{ok:<5}{'yes' if r['unexplained'] else '-':<4}"
             f"{r['baseline_fit']:>6.1f}{r['final_fit']:>7.1f}{r['true_fit']:>7.1f}{r['dfit']:>+7.2f}"
             f"{r['wall_s']:>7.0f}")
 
@@ -255,7 +270,8 @@ def hard_summary(results) -> list:
     failed = n - len(good)
     exact = sum(r["exact"] for r in good)
     within1 = sum(r["dfit"] >= -1.0 for r in good)
-    worst = min((r["dfit"] for r in good), default=float("nan"))
+    worst = min((r["dfit"] for r in good if math.isfinite(r["dfit"])), default=float("nan"))
+    no_oracle = sum(not math.isfinite(r["dfit"]) for r in good)
     free = [r for r in good if r["class"] == "effect_free"]
     outside = [r for r in good if r["class"] == "outside"]
     walls = [r["wall_s"] for r in good]
@@ -268,7 +284,7 @@ def hard_summary(results) -> list:
         ("selected set exactly the truth >= 90 %", pct(exact), exact >= TARGETS["exact"] * n),
         ("final fit within 1 point of the true structure's >= 95 %", pct(within1), within1 >= TARGETS["within_1"] * n),
         ("never more than 3 points below", f"worst {worst:+.2f} points", worst >= -TARGETS["worst_below"]
-         and not failed),
+         and not failed and not no_oracle),
         ("nothing selected on effect-free records",
          f"{sum(not r['selected'] for r in free)}/{len(free)}", all(not r["selected"] for r in free) and free),
         ("outside the catalogue -> 'unexplained' (and nothing selected)",
@@ -283,6 +299,9 @@ def hard_summary(results) -> list:
             for a, b, c in rows]
     if failed:
         out.append(f"{failed} record(s) failed (counted as misses)")
+    if no_oracle:
+        out.append(f"{no_oracle} record(s) without a true-structure fit (oracle failed; counted as misses of the fit "
+                   "targets)")
     by_class = {}
     for r in good:
         by_class.setdefault(r["class"], []).append(r)
@@ -320,7 +339,7 @@ def _hard(args) -> int:
     except Exception:  # noqa: BLE001 - the commit is informative only
         commit = ""
     meta = {"commit": commit.strip(), "records": names, "jobs": args.jobs, "started": time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime())}
-    header = (f"{'record':<47}{'expected':<41}{'selected':<41}{'':<5}{'une':<4}{'base':>6}{'final':>7}"
+    header = (f"{'record':<47}{'expected':<33}{'selected':<44}{'':<5}{'une':<4}{'base':>6}{'final':>7}"
               f"{'true':>7}{'dfit':>7}{'wall':>7}")
     print(f"diagnosis benchmark (issue 12): {len(names)} records on {args.jobs} processes, kilnctl {meta['commit']}")
     print(header, flush=True)
