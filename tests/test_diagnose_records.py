@@ -87,3 +87,22 @@ def test_visibility_sees_the_true_structure_reproduce_a_kilnctl_record():
     assert v["true_fit"] == pytest.approx(expected_fit, abs=0.15 * (100.0 - expected_fit))
     m2, truth2 = make(find("range:speed_sensor_lag@0.3x/s1"))
     assert visibility(m2, truth2)["invisible"] == ["speed_sensor_lag"]
+
+
+def test_summary_counts_against_the_targets_of_issue_12():
+    # Truth: counts by hand over five made-up outcomes (one failed record counts against every share)
+    from benchmarks.diagnose_confusion import hard_summary
+
+    def rec(klass, exact, dfit, selected=(), unexplained=None, wall=10.0):
+        return {"name": klass, "class": klass, "exact": exact, "dfit": dfit, "selected": list(selected),
+                "unexplained": unexplained, "wall_s": wall}
+
+    rs = [rec("foreign", True, 0.0, ["viscous_drag"], wall=12.0), rec("foreign", False, -3.5, ["backlash"], wall=30.0),
+          rec("effect_free", True, 0.0, wall=8.0), rec("outside", True, -0.5, unexplained="a local failure", wall=25.0),
+          {"name": "x", "error": "RuntimeError: boom", "wall_s": 1.0}]
+    lines = "\n".join(hard_summary(rs))
+    assert "3/5 (60 %)" in lines          # exact: 3 of 5 (the failed record is a miss)
+    assert "worst -3.50 points" in lines  # and that misses the 3-point target
+    assert "1/1 (unexplained 1)" in lines
+    assert "median wall time <= 20 s per 40 s record                      18 s" in lines  # median of 12, 30, 8, 25
+    assert "1 record(s) failed" in lines
