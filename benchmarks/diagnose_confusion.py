@@ -311,6 +311,39 @@ def hard_summary(results) -> list:
     return out
 
 
+def markdown(path) -> str:
+    """The per-record table and the summary of a saved run, as Markdown (for docs/benchmarks.md).
+
+    Parameters
+    ----------
+    path : path-like
+        JSON written by ``--json``.
+
+    Returns
+    -------
+    str
+    """
+    data = json.loads(Path(path).read_text())
+    meta, rs = data["meta"], data["records"]
+    out = [f"Run started {meta.get('started', '?')} at kilnctl {meta.get('commit', '?')}, {len(rs)} of "
+           f"{len(meta.get('records', rs))} records finished, {meta.get('jobs', '?')} processes"
+           + (f", {meta['wall_s']:.0f} s in all" if "wall_s" in meta else " (interrupted)") + ".", "",
+           "| record | expected | selected | ok | unexplained | base | final | true | dfit | wall [s] |",
+           "|---|---|---|---|---|---|---|---|---|---|"]
+    for r in rs:
+        if "error" in r:
+            out.append(f"| {r['name']} | | failed: {r['error'][:80]} | no | | | | | | |")
+            continue
+        ok = (bool(r["unexplained"]) and not r["selected"]) if r["class"] == "outside" else r["exact"]
+        exp = ", ".join(SHORT.get(e, e) + ("?" if e in r.get("invisible", ()) else "") for e in r["expected"]) or "-"
+        sel = ", ".join(SHORT.get(e, e) for e in r["selected"]) or "-"
+        out.append(f"| {r['name']} | {exp} | {sel} | {'yes' if ok else '**no**'} | {'yes' if r['unexplained'] else '-'} "
+                   f"| {r['baseline_fit']:.1f} | {r['final_fit']:.1f} | {r['true_fit']:.1f} | {r['dfit']:+.2f} "
+                   f"| {r['wall_s']:.0f} |")
+    out += ["", "```", *hard_summary(rs), "```"]
+    return "\n".join(out)
+
+
 def _hard(args) -> int:
     from benchmarks.diagnose_records import QUICK, RECORDS, find
 
@@ -383,6 +416,7 @@ def main(argv=None) -> int:
     ap.add_argument("--record", action="append", default=[], metavar="NAME",
                     help="run only this record (repeatable; see --list)")
     ap.add_argument("--list", action="store_true", help="list the records and exit")
+    ap.add_argument("--markdown", metavar="JSON", help="print a saved run as a Markdown table and summary")
     ap.add_argument("--records", metavar="FOLDER", help="keep the CSV records (and their truth) in this new folder")
     ap.add_argument("--catalogue-table", action="store_true",
                     help="instead: the confusion table on kilnctl's own generator (--seeds, --effects, --no-pairs)")
@@ -396,6 +430,9 @@ def main(argv=None) -> int:
     ap.add_argument("--foreign", action="store_true",
                     help="instead: records generated differently (other implementations, magnitudes, sampling)")
     args = ap.parse_args(argv)
+    if args.markdown:
+        print(markdown(args.markdown))
+        return 0
     if not (args.foreign or args.catalogue_table):
         return _hard(args)
     if args.foreign:
