@@ -7,9 +7,11 @@ and writes its figures into ``DIR``:
 2. root-locus design of the speed-loop gains (``root_locus.png``,
    ``step_response.png``, ``param_locus.png``, ``design.png``);
 3. the design verified on the nonlinear macro and micro models
-   (``verify_macro.png``, ``startup_micro.png``, ``startup_micro.csv``);
-4. later steps when their modules are present: the start-up ramp
-   optimization and the diagnosis of the example measurement.
+   (``verify_macro.png``, the report ``verify/verify.html``,
+   ``startup_micro.png``, ``startup_micro.csv``);
+4. the start-up ramp that lowers the start-up (dynamic) gear stress
+   (``ramp_optimization.png``, the report ``ramp/optimize_ramp.html``);
+5. the diagnosis of the example measurement (``diagnose/diagnose.html``).
 """
 
 from __future__ import annotations
@@ -21,6 +23,11 @@ import time
 from pathlib import Path
 
 from .params import Parameters
+
+
+#: the burden's modes (kilnctl.model.kiln) in words
+_BURDEN_MODES = {"stick": "stuck to the shell", "slip_pos": "sliding on the shell wall",
+                 "slip_neg": "sliding against the turning", "held": "held at its angle by kinetic friction"}
 
 
 def _step(title: str) -> float:
@@ -61,8 +68,9 @@ def main(argv=None) -> int:
     _step("1. Parameters (the paper's Table 1 and documented assumptions)")
     params = Parameters()
     params.to_toml(out / "params.toml", overwrite=True)
-    print(f"  J_stick = {params.J_stick:.2f} kg*m^2, J_slip = {params.J_slip:.2f} kg*m^2 at the motor; "
-          f"n = {params.n}, n_r = {params.n_r:.1f}; wrote {out / 'params.toml'}")
+    print(f"  inertia at the motor: J_stick = {params.J_stick:.2f} kg*m^2 (burden stuck to the shell), "
+          f"J_slip = {params.J_slip:.2f} kg*m^2 (burden sliding); reduction motor to kiln n = {params.n:g} "
+          f"(gearbox {params.n_r:.1f}); wrote {out / 'params.toml'}")
 
     # --- design -------------------------------------------------------------------
     t0 = _step("2. Root-locus design of the speed-loop PID (eq. 21)")
@@ -83,14 +91,19 @@ def main(argv=None) -> int:
     v = verify(params, "macro", 40.0)
     print("  " + str(v).replace("\n", "\n  "))
     _save(v.plot(), out / "verify_macro.png")
+    from .pages import write_verify_report
+
+    write_verify_report(v, out / "verify")
+    print(f"  report: {out / 'verify' / 'verify.html'}")
     from .simulate import simulate
 
     micro = simulate(params, "micro", 60.0)
     s = micro.summary()
-    print(f"  micro model 60 s: peak current {s['peak_current_A']:.0f} A, final {s['final_current_A']:.0f} A, "
-          f"peak tooth stress {s['peak_stress_Pa'] / 1e6:.1f} MPa, final {s['final_stress_Pa'] / 1e6:.1f} MPa, "
-          f"{s['n_events']} mode switches, burden {s['burden_mode_final']}; simulated in "
-          f"{micro.info['wall_s'] * 1e3:.0f} ms")
+    burden = _BURDEN_MODES.get(s["burden_mode_final"], s["burden_mode_final"])
+    print(f"  micro model (backlash and tooth stress), 60 s: peak current {s['peak_current_A']:.0f} A, final "
+          f"{s['final_current_A']:.0f} A; peak tooth stress {s['peak_stress_Pa'] / 1e6:.1f} MPa, final "
+          f"{s['final_stress_Pa'] / 1e6:.1f} MPa; {s['n_events']} mode switches, at the end the burden is {burden}; "
+          f"simulated in {micro.info['wall_s'] * 1e3:.0f} ms")
     _save(micro.plot(), out / "startup_micro.png")
     micro.to_csv(out / "startup_micro.csv")
     print(f"  wrote {out / 'startup_micro.csv'}")
@@ -108,6 +121,14 @@ def main(argv=None) -> int:
     # --- diagnosis of the example measurement -----------------------------------------
     t0 = _step("5. Model against measurement: where it fails, which effect is missing")
     from .measure.example import diagnose_example
+
+    from .measure.diagnose import Diagnosis
+
+    crit = Diagnosis()  # the example is diagnosed with the default criteria
+    print("  Each catalogued effect is added to the calibrated model in turn. dBIC: change of the information "
+          f"criterion\n  (negative favours the effect, below {-crit.min_delta_bic:g} counts); held-out gain: better "
+          f"prediction of the samples not fitted\n  (above {crit.min_holdout_gain:g} % counts). An effect is "
+          "supported when it passes both; the best one is added and the search repeats.")
 
     diagnose_example(out, progress=lambda line: print("  " + line))
     print(f"  ({time.perf_counter() - t0:.1f} s)")

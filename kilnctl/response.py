@@ -223,7 +223,9 @@ class Response:
         for ax in axes:
             ax.grid(True, alpha=0.3)
         s = self.summary()
+        burden = {"stick": "stuck", "slip_pos": "sliding", "slip_neg": "sliding back", "held": "held by friction"}
         fig.suptitle(f"kilnctl {self.model} model: peak current {s['peak_current_A']:.0f} A, final "
-                     f"{s['final_current_A']:.0f} A, {s['n_events']} mode switches, burden {s['burden_mode_final']}")
+                     f"{s['final_current_A']:.0f} A, {s['n_events']} mode switches; burden at the end: "
+                     f"{burden.get(s['burden_mode_final'], s['burden_mode_final'])}")
         fig.tight_layout()
         return fig

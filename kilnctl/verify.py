@@ -23,6 +23,10 @@ from .simulate import resolve_gains, simulate
 __all__ = ["Verification", "verify", "ramp_figures"]
 
 RPM_PER_RAD_S = 60.0 / (2.0 * np.pi)
+#: the quantities of :meth:`Verification.table` as printed
+QUANTITY_LABELS = {"overshoot_pct": "overshoot after the ramp [%]", "settle_time_s": "settled within 2 % from [s]",
+                   "ramp_lag_rpm": "lag at the end of the ramp [rpm]", "peak_current_A": "peak current [A]",
+                   "final_current_A": "final current [A]"}
 
 
 def ramp_figures(t, speed_rpm, current_a, params: Parameters) -> dict:
@@ -106,11 +110,11 @@ class Verification:
 
     def __str__(self) -> str:
         def f(v):
-            return "-" if v is None else f"{v:10.3f}"
-        lines = [f"{'quantity':<18} {'linear stick':>12} {'linear slip':>12} {'nonlinear':>12}"]
+            return "not reached" if v is None else f"{v:10.3f}"
+        lines = [f"{'':<32} {'linear stick':>12} {'linear slip':>12} {'nonlinear':>12}"]
         for r in self.table():
-            lines.append(f"{r['quantity']:<18} {f(r['linear_stick']):>12} {f(r['linear_slip']):>12} "
-                         f"{f(r['nonlinear']):>12}")
+            lines.append(f"{QUANTITY_LABELS.get(r['quantity'], r['quantity']):<32} {f(r['linear_stick']):>12} "
+                         f"{f(r['linear_slip']):>12} {f(r['nonlinear']):>12}")
         lines.append("")
         lines += [f"- {r}" for r in self.reasons]
         return "\n".join(lines)
@@ -209,11 +213,13 @@ def verify(params: Parameters | None = None, model: str = "macro", t_end: float 
     figs = ramp_figures(tt, nl["speed_rpm"][uniq], nl["i_a"][uniq], params)
     reasons = []
     load = figs["final_current_A"] - linear["stick"]["figures"]["final_current_A"]
+    lin_final = linear["stick"]["figures"]["final_current_A"]
     reasons.append(
-        f"current: the linear model carries no load torque (T_l = 0) and ends at "
-        f"{linear['stick']['figures']['final_current_A']:.0f} A; the nonlinear plant ends at "
-        f"{figs['final_current_A']:.0f} A, and the difference, {load:.0f} A, holds the burden and bearing "
-        f"friction ({load * params.k_i * params.n / 1e6:.2f} MN*m at the kiln)")
+        f"current: the linear model carries no load torque (T_l = 0) and ends at {lin_final:.0f} A; the nonlinear "
+        f"plant ends at {figs['final_current_A']:.0f} A, "
+        + ("all of which" if abs(lin_final) < 0.005 * abs(figs["final_current_A"])
+           else f"and the difference, {load:.0f} A,")
+        + f" holds the burden and bearing friction ({load * params.k_i * params.n / 1e6:.2f} MN*m at the kiln)")
     brk = [e for e in nl.events if e.component == "burden" and e.kind == "breakaway"]
     if brk:
         reasons.append(

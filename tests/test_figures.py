@@ -54,7 +54,9 @@ def test_root_locus_states_its_margins_and_has_no_interactive_hint(design, tmp_p
     req = design.requirements
     for cond, r in design.reports.items():
         # truth: the design's condition report (poles computed by the design, not by the plot)
-        line = next(t for t in text.splitlines() if t.startswith(f"{cond}: min"))
+        lines = text.splitlines()
+        i = next(k for k, t in enumerate(lines) if t.startswith(f"{cond}: min"))
+        line = lines[i] + lines[i + 1]
         dz = r.zeta_min_all - req.zeta_min
         dw = req.wn_max - r.dominant_wn
         assert f"{r.zeta_min_all:.3f}" in line and f"margin {dz if abs(dz) >= 5e-4 else 0.0:.3f}" in line

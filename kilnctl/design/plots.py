@@ -167,9 +167,9 @@ def _margin_text(data) -> str:
         dz = 0.0 if abs(dz) < 5e-4 else dz  # no "-0.000"
         dw = 0.0 if abs(dw) < 5e-3 else dw
         on = [n for n, d in (("$\\zeta$", dz), ("$\\omega_n$", dw)) if d == 0.0]
-        lines.append(f"{cond}: min $\\zeta$ {zeta:.3f} (limit {req.zeta_min:g}, margin {dz:.3f}); "
-                     f"dominant $\\omega_n$ {wn:.2f} rad/s (limit {req.wn_max:.2f}, margin {dw:.2f})"
-                     + (f": on the {' and '.join(on)} limit" if on else ""))
+        lines.append(f"{cond}: min $\\zeta$ {zeta:.3f} (limit {req.zeta_min:g}, margin {dz:.3f})\n"
+                     f"   dominant $\\omega_n$ {wn:.2f} rad/s (limit {req.wn_max:.2f}, margin {dw:.2f})"
+                     + (f"\n   on the {' and '.join(on)} limit{'s' if len(on) > 1 else ''}" if on else ""))
     return "\n".join(lines)
 
 

@@ -503,8 +503,8 @@ def diagnosis_plain_headline(d) -> str:
         for fp in CATALOGUE[e].parameters:
             for k in (fp.name, fp.partner):
                 if k and k in fc.values_:
-                    vals.append(f"{k} = {_value_words(fc.values_[k], fc.stderr_[k], k in fc.not_identifiable_)}"
-                                f" {pretty_unit(unit_of(k))}".rstrip())
+                    words = _value_words(fc.values_[k], fc.stderr_[k], k in fc.not_identifiable_, unit_of(k))
+                    vals.append(f"{k} = {words}")
         found.append(_effect_words(e) + (f" ({', '.join(vals)})" if vals else ""))
     effects = found[0] if len(found) == 1 else ", ".join(found[:-1]) + " and " + found[-1]
     s = (f"Missing from the model: {effects}. With {'it' if len(found) == 1 else 'them'} the current fit rose "
@@ -514,14 +514,20 @@ def diagnosis_plain_headline(d) -> str:
     return s
 
 
-def _value_words(v, se, not_identifiable=False) -> str:
-    """``20.7 ± 0.1``; words where the uncertainty is not a number."""
+def _value_words(v, se, not_identifiable=False, unit="") -> str:
+    """``20.7 ± 0.1 kg·m²``; words where the uncertainty is not a number."""
+    unit = f" {pretty_unit(unit)}" if unit else ""
     if v is None or not math.isfinite(v):
         return "not determined"
     if not_identifiable or se is None or not math.isfinite(se):
-        return f"{v:.4g} (not identifiable from this record)"
+        return f"{v:.4g}{unit} (not identifiable from this record)"
     a, b = value_pair(v, se)
-    return f"{a} ± {b}" if b else a
+    return (f"{a} ± {b}" if b else a) + unit
+
+
+def _signed(x: float) -> str:
+    """``+44.8``; ``+0.0`` rather than ``-0.0``."""
+    return f"{round(x, 1) + 0.0:+.1f}" if math.isfinite(x) else "-"
 
 
 def uncertainty_words(se, not_identifiable: bool = False, on_bound: bool = False) -> str:
@@ -750,9 +756,9 @@ def diagnosis_html(d, figs=None) -> str:
         for j, r in enumerate(rnd):
             if r.supported and j == 0:
                 sel.add(j)
-            pars = "; ".join(f"{k} = {_value_words(v['value'], v['stderr'])} {pretty_unit(v['unit'])}".rstrip()
+            pars = "; ".join(f"{k} = {_value_words(v['value'], v['stderr'], k in r.not_identifiable, v['unit'])}"
                              for k, v in r.parameters.items() if k in _effect_params(r.effect))
-            rows.append((r.effect, f"{r.delta_bic:.1f}", f"{r.holdout_gain:+.1f}",
+            rows.append((r.effect, f"{r.delta_bic:.1f}", _signed(r.holdout_gain),
                          f"{r.fit_percent.get('current_A', math.nan):.1f}", pars or "-",
                          ("on bound: " + ", ".join(r.on_bound) + ". ") * bool(r.on_bound)
                          + ("supported" if r.supported else r.reason)))

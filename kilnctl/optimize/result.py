@@ -266,16 +266,20 @@ class RampResult:
             return f"{s['profile']} ramp found ({s['solver_status']}), not verified on the hybrid plant"
         dyn = 100.0 * (1 - s["dynamic_stress_verified_Pa"] / s["baseline_dynamic_stress_Pa"])
         peak = s["reduction_pct"]
+        base = f"with the {rate:g} rpm/s ramp"
+        first_is_dyn = self.objective_kind == "dynamic"
         dyn_text = (f"start-up (dynamic) stress {mpa(s['dynamic_stress_verified_Pa'])} against "
-                    f"{mpa(s['baseline_dynamic_stress_Pa'])} with the {rate:g} rpm/s ramp ({_change(dyn)})")
+                    f"{mpa(s['baseline_dynamic_stress_Pa'])}{' ' + base if first_is_dyn or abs(peak) < 0.05 else ''} "
+                    f"({_change(dyn)})")
         if abs(peak) < 0.05:
             peak_text = (f"the peak stress, {mpa(s['peak_stress_verified_Pa'])}, is the same with both ramps: "
                          "it is the running load of the burden, which no ramp changes")
         else:
             peak_text = (f"peak stress {mpa(s['peak_stress_verified_Pa'])} against "
-                         f"{mpa(s['baseline_peak_stress_Pa'])} ({_change(peak)})")
-        first, second = (dyn_text, peak_text) if self.objective_kind == "dynamic" else (peak_text, dyn_text)
-        return f"{_profile_name(s['profile'])} ramp: {first}; {second}"
+                         f"{mpa(s['baseline_peak_stress_Pa'])}{'' if first_is_dyn else ' ' + base} ({_change(peak)})")
+        first, second = (dyn_text, peak_text) if first_is_dyn else (peak_text, dyn_text)
+        name = _profile_name(s["profile"])
+        return f"{name[0].upper()}{name[1:]} ramp: {first}; {second}"
 
     def plot(self, fig=None):
         """Draw reference, bending stress and current: optimum against the baseline.
