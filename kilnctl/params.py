@@ -424,6 +424,10 @@ class Parameters(Mapping):
     def __setattr__(self, key, value):
         raise AttributeError("Parameters are immutable: use p.replace(name=value)")
 
+    def __reduce__(self):
+        # pickled by value (worker processes): rebuilt, and so re-checked, from its values
+        return (Parameters, (dict(self._values),))
+
     def __repr__(self) -> str:
         changed = {k: v for k, v in self._values.items() if v != SPECS[k].default}
         return f"Parameters({changed!r})"

@@ -182,3 +182,25 @@ def test_mu_s_is_not_identifiable_under_the_papers_law():
 def test_unfitted_calibration_refuses_to_predict():
     with pytest.raises(NotFittedError, match="fit"):
         Calibration(GIVEN).predict()
+
+
+def test_best_step_against_brute_force():
+    # truth: a step of +3 at t = 6.2 s in noise, and the same fit by a brute-force least-squares solve at every split
+    from kilnctl.measure.stats import best_step
+
+    rng = np.random.default_rng(2)
+    t = np.arange(0.0, 10.0, 0.02)
+    e = 0.5 + 3.0 * (t >= 6.2) + 0.3 * rng.standard_normal(t.size)
+    s = best_step(t, e, t_min=2.0, t_max=9.0)
+    brute = []
+    for k in range(3, t.size - 2):
+        if not 2.0 <= t[k] <= 9.0:
+            continue
+        X = np.column_stack([np.ones(t.size), (np.arange(t.size) >= k).astype(float)])
+        beta, *_ = np.linalg.lstsq(X, e, rcond=None)
+        brute.append((float(np.sum((e - X @ beta) ** 2)), t[k], beta[1]))
+    rss, tk, size = min(brute)
+    assert s["t"] == pytest.approx(tk) and s["t"] == pytest.approx(6.2, abs=0.05)
+    assert s["rss"] == pytest.approx(rss, rel=1e-9) and s["size"] == pytest.approx(size, rel=1e-9)
+    assert s["rss_constant"] == pytest.approx(float(np.sum((e - e.mean()) ** 2)), rel=1e-12)
+    assert best_step(t, e, t_min=20.0) is None  # no allowed step time

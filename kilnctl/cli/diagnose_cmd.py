@@ -9,6 +9,7 @@ and the figures as PNG.  Input files are never modified.
 
 from __future__ import annotations
 
+import os
 import sys
 
 from . import print_json
@@ -16,6 +17,18 @@ from .common import add_strict_arg, check_report_dir, warn_implausible
 from .compare_cmd import parse_names
 
 __all__ = ["register", "run"]
+
+
+def _positive_int(text: str) -> int:
+    import argparse
+
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"--workers {text!r}: give a whole number of processes, 1 or more")
+    return value
 
 
 def register(sub) -> None:
@@ -40,9 +53,14 @@ def register(sub) -> None:
     p.add_argument("--config", metavar="FILE", help="setup of the experiment (kilnctl TOML parameter file with an "
                    "optional [measurement] section); default: the paper's Table 1")
     p.add_argument("--model", choices=("macro", "micro"), default="macro", help="base model (default macro)")
+    from ..measure.effects import DEFAULT_CALIBRATE
+
     p.add_argument("--calibrate", default=None, metavar="A,B",
                    help="base parameters to calibrate (default: the setup's [measurement] calibrate, else "
-                        "mu_c,mu_s,m_v)")
+                        + ",".join(DEFAULT_CALIBRATE) + ")")
+    p.add_argument("--workers", type=_positive_int, default=min(2, os.cpu_count() or 1), metavar="N",
+                   help="processes refitting the candidates in parallel (default: 2, or 1 on one CPU); the result "
+                        "does not depend on it")
     p.add_argument("--candidates", default=None, metavar="A,B", help="catalogue effects to try (default: all)")
     p.add_argument("--holdout", choices=("blocks", "tail"), default="blocks",
                    help="held-out part: interleaved blocks (default) or the last 30 %% of the record")
@@ -78,7 +96,7 @@ def run(args) -> int:
                   else setup.options.get("candidates"))
     data = read_record(args.data, setup.params, record_columns(setup, args.columns))
     d = Diagnosis(setup.params, calibrate, candidates, model=args.model, holdout=args.holdout,
-                  t0=setup.options.get("t0_s"))
+                  t0=setup.options.get("t0_s"), workers=args.workers)
     progress = None if (args.quiet or args.json) else (lambda s: print(s, file=sys.stderr, flush=True))
     d.fit(data, progress=progress)
     written = d.report(args.report, protect=(args.data, args.config)) if args.report else []

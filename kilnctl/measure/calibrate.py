@@ -20,56 +20,30 @@ attributes, which end in ``_``; ``predict`` and ``score`` need a fit first.
 
 from __future__ import annotations
 
-import contextlib
 import math
-import signal
-import threading
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..errors import KilnctlError, ModelError, NotFittedError
 from ..params import Parameters
 from ..simulate import resolve_gains
-from .effects import FreeParameter, free_parameter
+from .effects import DEFAULT_CALIBRATE, FreeParameter, free_parameter
 from .io import Experiment, Measurement
 from .runner import CHANNELS, ModelRun, run_model
 from .stats import fit_percent
 
-__all__ = ["Calibration", "holdout_masks", "bic", "sweep"]
+__all__ = ["Calibration", "Starts", "Horizons", "Smoothing", "default_starts", "holdout_masks", "bic", "sweep"]
 
-#: a trial run slower than this many times the median run [-] (and than MIN_LIMIT_S) is cut short
+#: a trial run slower than this many times the median run [-] (and than MIN_LIMIT_S [s]) counts as failed:
+#: a destabilised loop that chatters is a poor fit, and the optimizer is steered away from it
 SLOW_FACTOR = 30.0
 MIN_LIMIT_S = 4.0
 #: mode switches allowed in one trial run (a destabilised loop chatters on its limits)
 MAX_EVENTS = 300
 #: residual value given to a failed trial run, in scaled units
 PENALTY = 30.0
-
-
-class _Timeout(Exception):
-    pass
-
-
-@contextlib.contextmanager
-def _time_limit(seconds):
-    """Raise _Timeout after ``seconds`` of wall time (main thread with SIGALRM only)."""
-    if (seconds is None or not hasattr(signal, "setitimer")
-            or threading.current_thread() is not threading.main_thread()):
-        yield
-        return
-
-    def handler(signum, frame):
-        raise _Timeout()
-
-    old = signal.signal(signal.SIGALRM, handler)
-    signal.setitimer(signal.ITIMER_REAL, seconds)
-    try:
-        yield
-    finally:
-        signal.setitimer(signal.ITIMER_REAL, 0)
-        signal.signal(signal.SIGALRM, old)
 
 
 def holdout_masks(measurement: Measurement, kind: str = "blocks", fraction: float = 0.3, n_blocks: int = 15,
@@ -248,6 +222,9 @@ class _Problem:
         t_act = measurement.t[active]
         self.dt = float(np.median(np.diff(t_act))) if t_act.size > 1 else 1.0
         self.smooth_n = 1  # moving-average width of the residual [samples] (see Calibration.fit, smoothing)
+        self.deadline = None  # time.perf_counter() value after which no further trial is run
+        self._limit = None  # wall time [s] above which a trial run counts as failed
+        self.step_window = None  # (t_min, t_max) [s]: an abrupt step of the current is part of the model
 
     def set_smoothing(self, width_s: float) -> None:
         """Compare moving averages of ``width_s`` seconds of the residual (0: the residual itself)."""
@@ -260,23 +237,49 @@ class _Problem:
             self.n_failed += 1
             self.last_error = str(exc)
             return None
+        if self.deadline is not None and time.perf_counter() > self.deadline:
+            # the fit's time is up: every further trial is a failed one, so the optimizer stops where it is
+            # (checked here, between runs: safe in threads, worker processes and library calls, unlike a signal)
+            self.n_failed += 1
+            self.last_error = "the calibration's time limit was reached"
+            return None
         limit = None
         if len(self.walls) >= 3:
-            limit = max(MIN_LIMIT_S, SLOW_FACTOR * float(np.median(self.walls)))
+            if self._limit is None or len(self.walls) % 25 == 0:  # the median moves slowly: not at every run
+                self._limit = max(MIN_LIMIT_S, SLOW_FACTOR * float(np.median(self.walls[-200:])))
+            limit = self._limit
         t_start = time.perf_counter()
         try:
-            with _time_limit(limit):
-                run = run_model(p, self.m, self.exp, model=self.model, effects=self.effects, max_events=MAX_EVENTS)
-        except _Timeout:
-            self.n_failed += 1
-            self.last_error = f"trial run slower than {limit:.0f} s (cut short)"
-            return None
+            run = run_model(p, self.m, self.exp, model=self.model, effects=self.effects, max_events=MAX_EVENTS)
         except KilnctlError as exc:
             self.n_failed += 1
             self.last_error = str(exc)
             return None
-        self.walls.append(time.perf_counter() - t_start)
+        wall = time.perf_counter() - t_start
+        if limit is not None and wall > limit:
+            self.n_failed += 1
+            self.last_error = f"trial run slower than {limit:.0f} s ({wall:.0f} s): counted as a failed run"
+            return None
+        self.walls.append(wall)
+        if self.step_window is not None:
+            self._add_step(run)
         return run
+
+    def _add_step(self, run: ModelRun) -> None:
+        """Add to the model's current the best step b H(t - tau) of its residual on the fitted samples,
+        tau inside ``step_window`` (variable projection: b and tau are fitted in closed form at every trial
+        of the others)."""
+        from .stats import best_step
+
+        t = self.m.t[self.m.t >= self.exp.t0 - 1e-9]
+        cur = run.outputs["current_A"]
+        e = self.meas["current_A"] - cur
+        sel = self.mask
+        step = best_step(t[sel], e[sel], t_min=self.step_window[0], t_max=self.step_window[1], intercept=False)
+        if step is None:
+            return
+        run.outputs["current_A"] = cur + step["size"] * (t >= step["t"])
+        run.step = step
 
     def residual(self, run: ModelRun | None, mask=None) -> np.ndarray:
         mask = self.mask if mask is None else mask
@@ -307,6 +310,244 @@ class _Trial:
     cost: float
 
 
+# --- how a fit is searched: small strategies ---------------------------------------------------
+@dataclass(frozen=True)
+class Starts:
+    """Where the local fits of a calibration begin.
+
+    The given values and every further point are compared by cost (one
+    simulation each, on the first horizon and the widest smoothing); local
+    fits run from the given values (when ``n_local > 1``), from the best
+    point however close it lies (a narrow valley next to a good guess is
+    common: a backlash impact, a current limit), and from the next best
+    that lie apart from those chosen.
+
+    Attributes
+    ----------
+    points : tuple of dict or None
+        Further starting points [units of each parameter], each completing
+        the given values; None: :func:`default_starts`.
+    n_local : int
+        Local fits to run.
+    separation : float
+        Least distance (largest scaled-coordinate difference) between two
+        chosen points [-]: 1 is a factor e for a log-scaled parameter.
+    """
+
+    points: tuple | None = None
+    n_local: int = 2
+    separation: float = 1.0
+
+    def points_from(self, names, given: dict) -> list[dict]:
+        """The given values, then each further point completed by them."""
+        extra = default_starts(names, given) if self.points is None else list(self.points)
+        return [dict(given)] + [dict(given, **p) for p in extra]
+
+    def choose(self, u0s, costs) -> list:
+        """The scaled points the local fits start from (``u0s[0]`` is the given one)."""
+        if len(u0s) <= 1:
+            return list(u0s)
+        order = np.argsort(costs, kind="stable")
+        given = [0] if self.n_local > 1 else []
+        chosen: list[int] = []
+        for i in order:
+            if i in given:
+                continue
+            if all(np.max(np.abs(u0s[i] - u0s[j])) > self.separation for j in chosen):
+                chosen.append(int(i))
+            if len(given) + len(chosen) >= max(1, self.n_local):
+                break
+        return [u0s[i] for i in given + chosen]
+
+
+@dataclass(frozen=True)
+class Horizons:
+    """Growing fitting horizons, fractions of the record after the start [-].
+
+    The fit on each warm-starts the next, after probing a 3^p grid of small
+    steps around it (p <= 4 coordinates).  Stick-slip cycles make the
+    simulation-error cost of a long record rugged (a small change of friction
+    shifts every later cycle); a short horizon first finds the right basin.
+
+    Attributes
+    ----------
+    fractions : tuple of float
+        Horizons [-]; 1 (the whole record) is always the last.
+    """
+
+    fractions: tuple = (1.0,)
+
+    def schedule(self) -> list[float]:
+        """The horizons in order, ending with 1."""
+        hs = sorted({float(h) for h in self.fractions if 0 < float(h) <= 1.0} | {1.0})
+        return hs
+
+
+@dataclass(frozen=True)
+class Smoothing:
+    """Moving-average widths of the residual, widest first, for effects whose trace is an event in time.
+
+    A short event misplaced in time (a backlash impact one sample early)
+    costs as much as one missing altogether, and a jump misplaced by dt (a
+    stick-slip breakaway) costs in proportion to |dt|: a cusp a gradient
+    method cannot descend.  On a smoothed residual both costs fall smoothly as
+    the event moves closer.  Starting points are compared on the widest; on
+    every horizon the local fit runs through all of them in turn.
+
+    Attributes
+    ----------
+    widths_s : tuple of float
+        Widths [s]; 0 (the residual itself) is always the last.
+    """
+
+    widths_s: tuple = (0.0,)
+
+    def schedule(self) -> list[float]:
+        """The widths, widest first, ending with 0."""
+        return sorted({float(w) for w in self.widths_s if float(w) > 0}, reverse=True) + [0.0]
+
+
+@dataclass
+class _Local:
+    """The end of one local fit."""
+
+    u: np.ndarray
+    jac: np.ndarray | None
+    message: str
+    cost: float
+    start: np.ndarray
+    fit_percent: dict = field(default_factory=dict)
+
+    def to_dict(self, space) -> dict:
+        return {"start": {k: float(v) for k, v in space.decode(self.start).items()} if self.start.size else {},
+                "end": {k: float(v) for k, v in space.decode(self.u).items()} if self.u.size else {},
+                "cost": float(self.cost), "fit_percent": dict(self.fit_percent)}
+
+
+class _Search:
+    """Trial runs (cached), local trust-region fits and probes of one calibration problem."""
+
+    def __init__(self, prob: _Problem, space: _Space, t_active, t0, diff_step, max_nfev, tol):
+        self.prob, self.space = prob, space
+        self.cache: dict[bytes, _Trial] = {}
+        self.full_mask = prob.mask.copy()
+        self.t_act, self.t0 = t_active, t0
+        self.span = t_active[-1] - t0
+        self.diff_step, self.max_nfev, self.tol = diff_step, max_nfev, tol
+        self.nfev = 1
+        self.log_coord = np.array([c[0].startswith("ln(") for c in space.coords], bool)
+
+    def trial(self, u) -> _Trial:
+        key = np.asarray(u, float).tobytes()
+        if key not in self.cache:
+            vals = self.space.decode(u)
+            run = self.prob.run(vals)
+            r = self.prob.residual(run)
+            self.cache[key] = _Trial(vals, run, 0.5 * float(r @ r))
+            if len(self.cache) > 64:
+                self.cache.pop(next(iter(self.cache)))
+        return self.cache[key]
+
+    def fun(self, u):
+        return self.prob.residual(self.trial(u).run)
+
+    def set_horizon(self, h):
+        self.prob.mask = self.full_mask & (self.t_act <= self.t0 + h * self.span + 1e-9)
+        self.cache.clear()
+
+    def set_smoothing(self, w):
+        self.prob.set_smoothing(w)
+        self.cache.clear()
+
+    def jacobian(self, u) -> np.ndarray:
+        self.nfev += u.size
+        return _forward_jacobian(self.fun, u, self.diff_step, self.space.upper)
+
+    def fit_all(self, firsts, horizons: Horizons, smoothing: Smoothing) -> list[_Local]:
+        """A local fit from each starting point through every horizon and smoothing width."""
+        prob, out = self.prob, []
+        hs, widths = horizons.schedule(), smoothing.schedule()
+        for u in firsts:
+            if out and prob.deadline is not None and time.perf_counter() > prob.deadline:
+                break  # out of time: no further local fit
+            start, J, msg = u, np.zeros((0, 0)), "nothing to fit"
+            for i, h in enumerate(hs):
+                self.set_horizon(h)
+                if not self.space.coords:
+                    break
+                if i > 0:
+                    u = self.probe(u)
+                for w in widths:
+                    self.set_smoothing(w)
+                    u, J, msg = self.local(u)
+            self.set_smoothing(0.0)
+            deadline, prob.deadline = prob.deadline, None  # the end of a fit is always evaluated
+            end = self.trial(u)
+            out.append(_Local(u, J, msg, end.cost, start, prob.fits(end.run) if end.run is not None else {}))
+            prob.deadline = deadline
+        self.set_smoothing(0.0)
+        prob.deadline = None
+        return out
+
+    def local(self, u):
+        """One trust-region fit from u; coordinates without influence at u stay where they are
+        (a Gauss-Newton step along a zero Jacobian column is unbounded, and would throw the parameter
+        across a regime boundary, e.g. mu_s while the burden is held)."""
+        from scipy.optimize import least_squares
+
+        space = self.space
+        r0 = self.fun(u)
+        cols_j = _forward_jacobian(self.fun, u, self.diff_step, space.upper)
+        cols = np.linalg.norm(cols_j, axis=0)
+        self.nfev += 1 + u.size
+        live = cols > 1e-7 * max(cols.max(), 1e-300)
+        if not live.any():
+            return u, np.zeros((r0.size, u.size)), "no parameter influences the fit"
+
+        def f_live(v):
+            w = u.copy()
+            w[live] = v
+            return self.fun(w)
+
+        J0 = cols_j[:, live]
+        u_live0 = u[live].copy()
+
+        def jac_live(v):
+            # the first Jacobian is the one just computed for the influence check (same steps, same runs)
+            if np.array_equal(v, u_live0):
+                return J0
+            w = u.copy()
+            w[live] = v
+            self.nfev += int(live.sum())
+            return _forward_jacobian(self.fun, w, self.diff_step, space.upper, live)[:, live]
+
+        res = least_squares(f_live, u[live], jac=jac_live, bounds=(space.lower[live], space.upper[live]),
+                            x_scale=1.0, max_nfev=self.max_nfev, method="trf", ftol=self.tol, xtol=self.tol)
+        self.nfev += int(res.nfev)
+        w = u.copy()
+        w[live] = res.x
+        Jf = np.zeros((res.jac.shape[0], u.size))
+        Jf[:, live] = res.jac
+        return w, Jf, res.message
+
+    def probe(self, u):
+        """Best of a 3^p grid of small steps around u (3 % linear, 10 % log; p <= 4): run before each
+        longer horizon, where the next cycle may sit in a neighbouring valley."""
+        if u.size == 0 or u.size > 4:
+            return u
+        import itertools
+
+        space = self.space
+        steps = np.where(self.log_coord, 0.1, 0.03 * np.maximum(1.0, np.abs(u)))
+        best_u, best_c = u, self.trial(u).cost
+        for d in itertools.product((-1.0, 0.0, 1.0), repeat=u.size):
+            v = np.clip(u + steps * np.array(d), space.lower, space.upper)
+            c = self.trial(v).cost
+            if c < best_c:
+                best_u, best_c = v, c
+        return best_u
+
+
 # --- the estimator -------------------------------------------------------------------------
 class Calibration:
     """Fit chosen parameters of a model to a measured record.
@@ -316,7 +557,7 @@ class Calibration:
     params : Parameters
         Setup of the experiment and starting values.  The PID gains are fixed
         once (designed from the setup if ``gains = 'design'``).
-    parameters : sequence of str or FreeParameter, default ('mu_c', 'mu_s', 'm_v')
+    parameters : sequence of str or FreeParameter, default ('mu_c', 'mu_s', 'm_v', 'J_v')
         What to fit: names (bounds from :data:`~kilnctl.measure.effects.BASE_PARAMETERS`
         or the catalogue) or full declarations.
     model : {'macro', 'micro'}, default 'macro'
@@ -335,6 +576,22 @@ class Calibration:
         (each one simulation, plus one per parameter for the Jacobian).
     diff_step : float, default 1e-3
         Finite-difference step of the Jacobian, in scaled units [-].
+    tol : float, default 1e-4
+        A local fit stops when a step changes the cost, or the scaled
+        parameters, by less than this fraction [-] (``ftol`` and ``xtol`` of
+        ``scipy.optimize.least_squares``).  Structures are told apart by BIC
+        differences of 10 on thousands of samples, i.e. cost changes of a
+        few tenths of a per cent: finer convergence buys nothing.
+    abrupt_step : (float, float), optional
+        Add to the model a step b H(t - tau) of the current, tau between
+        these record times [s], b and tau fitted in closed form at every
+        trial (variable projection): the hypothesis of an abrupt change that
+        no model component describes (a load step, a process upset).  The
+        fitted step is ``step_`` and counts as two parameters in ``bic_``.
+    time_limit_s : float, optional
+        Wall time of a fit [s]: after it, every further trial run counts as
+        failed, so the local fits end at the best values found so far
+        (checked between runs, so safe in threads and worker processes).
 
     Attributes
     ----------
@@ -363,6 +620,12 @@ class Calibration:
         Final value of the scaled least-squares cost.
     nfev_ : int
         Simulations run by the optimizer (without the Jacobian's).
+    n_starts_ : int
+        Starting points compared by cost (one simulation each).
+    local_fits_ : list of dict
+        One per local fit: ``start`` and ``end`` values [units of each],
+        final ``cost`` [-] and ``fit_percent`` per channel [%] on the fitted
+        samples; the lowest cost is the fit kept.
     n_failed_ : int
         Trial runs that failed (counted as a poor fit).
     run_ : ModelRun
@@ -373,9 +636,10 @@ class Calibration:
         Optimizer status.
     """
 
-    def __init__(self, params: Parameters | None = None, parameters=("mu_c", "mu_s", "m_v"), *,
+    def __init__(self, params: Parameters | None = None, parameters=DEFAULT_CALIBRATE, *,
                  model: str = "macro", effects=(), bounds: dict | None = None, scales="std",
-                 t0: float | None = None, max_nfev: int = 40, diff_step: float = 1e-3):
+                 t0: float | None = None, max_nfev: int = 40, diff_step: float = 1e-3, tol: float = 1e-4,
+                 time_limit_s: float | None = None, abrupt_step=None):
         self.params = Parameters() if params is None else params
         self.parameters = tuple(parameters)
         self.model = model
@@ -385,6 +649,11 @@ class Calibration:
         self.t0 = t0
         self.max_nfev = max_nfev
         self.diff_step = diff_step
+        self.tol = tol
+        if time_limit_s is not None and not (isinstance(time_limit_s, (int, float)) and time_limit_s > 0):
+            raise ModelError(f"time_limit_s = {time_limit_s!r} must be a positive number of seconds (or None)")
+        self.time_limit_s = time_limit_s
+        self.abrupt_step = None if abrupt_step is None else (float(abrupt_step[0]), float(abrupt_step[1]))
 
     # --- helpers --------------------------------------------------------------------
     def _free(self) -> list[FreeParameter]:
@@ -425,16 +694,17 @@ class Calibration:
             default all from the start of the experiment.
         init : dict, optional
             Starting values [units of the parameters] (default: the setup's).
-        starts : list of dict, optional
+        starts : list of dict or Starts, optional
             Further candidate starting points, compared by cost (one
-            simulation each).  Default: a grid over the burden friction and
+            simulation each); a :class:`Starts` also sets ``n_local`` and
+            ``separation``.  Default: a grid over the burden friction and
             mass when they are fitted (mu_c x 0.7 ... 1.3, mu_s/mu_c 1.02 ...
             1.7, m_v x 0.9/1/1.1, J_v x 0.7 ... 1.4): the printed friction law
             has regimes (held, stick-slip) whose costs are separate valleys,
             and the burden inertia sets the phase of its oscillation.
         experiment : Experiment, optional
             The experiment (default: inferred from the record).
-        horizons : sequence of float, default (1.0,)
+        horizons : sequence of float or Horizons, default (1.0,)
             Growing fitting horizons, as fractions of the record after the
             start [-]: the fit on each warm-starts the next (after probing a
             3^p grid of small steps around it, p <= 4), and the starting
@@ -451,7 +721,7 @@ class Calibration:
         separation : float, default 1.0
             Least distance (largest scaled-coordinate difference) between two
             starting points of local fits [-].
-        smoothing : sequence of float, default (0.0,)
+        smoothing : sequence of float or Smoothing, default (0.0,)
             Moving-average widths of the residual [s], widest first: the
             starting points are compared on the first, and on every horizon
             the local fit runs through them in turn.  A short event misplaced
@@ -467,8 +737,6 @@ class Calibration:
         Calibration
             ``self``, fitted.
         """
-        from scipy.optimize import least_squares
-
         params = resolve_gains(self.params)
         exp = experiment or measurement.experiment(params, t0=self.t0)
         active = measurement.t >= exp.t0 - 1e-9
@@ -476,138 +744,47 @@ class Calibration:
         free = self._free()
         space = _Space(free, params)
         prob = _Problem(measurement, exp, params, self.model, self.effects, scales, mask)
+        prob.step_window = self.abrupt_step
         start_vals = {r: params[r] for r in space.reported}
         start_vals.update(init or {})
-        cache: dict[bytes, _Trial] = {}
-
-        def trial(u) -> _Trial:
-            key = np.asarray(u, float).tobytes()
-            if key not in cache:
-                vals = space.decode(u)
-                run = prob.run(vals)
-                r = prob.residual(run)
-                cache[key] = _Trial(vals, run, 0.5 * float(r @ r))
-                if len(cache) > 64:
-                    cache.pop(next(iter(cache)))
-            return cache[key]
-
-        def fun(u):
-            t = trial(u)
-            return prob.residual(t.run)
-
-        full_mask = prob.mask.copy()
-        t_act = measurement.t[active]
-        span = t_act[-1] - exp.t0
-        hs = sorted(float(h) for h in horizons) or [1.0]
-        if hs[-1] < 1.0:
-            hs.append(1.0)
-
-        def set_horizon(h):
-            prob.mask = full_mask & (t_act <= exp.t0 + h * span + 1e-9)
-            cache.clear()
-
-        widths = [float(w) for w in smoothing if float(w) > 0]
-        widths = sorted(set(widths), reverse=True) + [0.0]
-
-        def set_smoothing(w):
-            prob.set_smoothing(w)
-            cache.clear()
-
+        starts = starts if isinstance(starts, Starts) else Starts(None if starts is None else tuple(starts),
+                                                                  n_local, separation)
+        horizons = horizons if isinstance(horizons, Horizons) else Horizons(tuple(horizons))
+        smoothing = smoothing if isinstance(smoothing, Smoothing) else Smoothing(tuple(smoothing))
         t_wall = time.perf_counter()
-        set_horizon(hs[0])
-        set_smoothing(widths[0])
-        if starts is None:
-            starts = _default_starts(space.reported, start_vals)
-        candidates = [start_vals] + [dict(start_vals, **s) for s in starts]
-        u0s = [space.encode(c) for c in candidates]
-        if len(u0s) > 1:
-            costs = [trial(u).cost for u in u0s]
-            order = np.argsort(costs, kind="stable")
-            # the given starting point always gets a local fit, and so does the best one of the others, however
-            # close to it (a narrow valley next to a good guess is common: a backlash impact, a current limit);
-            # the rest must lie apart from each other
-            given = [0] if n_local > 1 else []
-            chosen: list[int] = []
-            for i in order:
-                if i in given:
-                    continue
-                if all(np.max(np.abs(u0s[i] - u0s[j])) > separation for j in chosen):
-                    chosen.append(int(i))
-                if len(given) + len(chosen) >= max(1, n_local):
-                    break
-            firsts = [u0s[i] for i in given + chosen]
-        else:
-            firsts = u0s
-        J, msg, nfev = np.zeros((0, 0)), "nothing to fit", 1
-        results = []
-        def local(u):
-            """One trust-region fit from u; coordinates without influence at u stay where they are
-            (a Gauss-Newton step along a zero Jacobian column is unbounded, and would throw the parameter
-            across a regime boundary, e.g. mu_s while the burden is held)."""
-            r0 = fun(u)
-            cols = np.zeros(u.size)
-            for j in range(u.size):
-                h = self.diff_step * max(1.0, abs(u[j]))
-                up = u.copy()
-                up[j] = up[j] + h if up[j] + h <= space.upper[j] else up[j] - h
-                cols[j] = np.linalg.norm(fun(up) - r0) / h
-            live = cols > 1e-7 * max(cols.max(), 1e-300)
-            if not live.any():
-                return u, np.zeros((r0.size, u.size)), "no parameter influences the fit", 1 + u.size
-
-            def f_live(v):
-                w = u.copy()
-                w[live] = v
-                return fun(w)
-
-            res = least_squares(f_live, u[live], bounds=(space.lower[live], space.upper[live]), x_scale=1.0,
-                                diff_step=self.diff_step, max_nfev=self.max_nfev, method="trf")
-            w = u.copy()
-            w[live] = res.x
-            Jf = np.zeros((res.jac.shape[0], u.size))
-            Jf[:, live] = res.jac
-            return w, Jf, res.message, int(res.nfev) + 1 + u.size
-
-        log_coord = np.array([c[0].startswith("ln(") for c in space.coords], bool)
-
-        def probe(u):
-            """Best of a 3^p grid of small steps around u (3 % linear, 10 % log; p <= 4): run before each
-            longer horizon, where the next cycle may sit in a neighbouring valley."""
-            if u.size == 0 or u.size > 4:
-                return u
-            import itertools
-
-            steps = np.where(log_coord, 0.1, 0.03 * np.maximum(1.0, np.abs(u)))
-            best_u, best_c = u, trial(u).cost
-            for d in itertools.product((-1.0, 0.0, 1.0), repeat=u.size):
-                v = np.clip(u + steps * np.array(d), space.lower, space.upper)
-                c = trial(v).cost
-                if c < best_c:
-                    best_u, best_c = v, c
-            return best_u
-
-        for u in firsts:
-            for i, h in enumerate(hs):
-                set_horizon(h)
-                if not space.coords:
-                    break
-                if i > 0:
-                    u = probe(u)
-                for w in widths:
-                    set_smoothing(w)
-                    u, J, msg, n_ev = local(u)
-                    nfev += n_ev
-            set_smoothing(0.0)
-            results.append((trial(u).cost, u, J, msg))
-        set_smoothing(0.0)
-        _, u, J, msg = min(results, key=lambda r: r[0])
-        if not space.coords:
-            u = np.zeros(0)
-        best = trial(u)
+        prob.deadline = None if self.time_limit_s is None else t_wall + self.time_limit_s
+        search = _Search(prob, space, measurement.t[active], exp.t0, self.diff_step, self.max_nfev, self.tol)
+        u0s = [space.encode(v) for v in starts.points_from(space.reported, start_vals)]
+        search.set_horizon(horizons.schedule()[0])
+        search.set_smoothing(smoothing.schedule()[0])
+        firsts = starts.choose(u0s, [search.trial(u).cost for u in u0s] if len(u0s) > 1 else [0.0])
+        results = search.fit_all(firsts, horizons, smoothing)
+        # the given starting point stays a candidate: a refit is never worse than the values it started from
+        # (a local fit on a rugged cost, or through a smoothed residual, can end above where it began)
+        if space.coords:
+            results.append(_Local(u0s[0], None, "the starting values: no local fit improved on them",
+                                  search.trial(u0s[0]).cost, u0s[0]))
+        best_fit = min(results, key=lambda r: r.cost)
+        u = best_fit.u if space.coords else np.zeros(0)
+        J = best_fit.jac if best_fit.jac is not None else search.jacobian(u)
+        best = search.trial(u)
         if best.run is None:
             raise KilnctlError(f"calibration failed: the model cannot be run at the fitted values "
                                f"({prob.last_error})")
         self.wall_s_ = time.perf_counter() - t_wall
+        self.local_fits_ = [r.to_dict(space) for r in results if r.jac is not None]
+        self.n_starts_ = len(u0s)
+        self.nfev_ = search.nfev
+        self.message_ = str(best_fit.message)
+        self._set_statistics(space, prob, free, params, best, u, J)
+        self.experiment_ = exp
+        self.scales_ = scales
+        self.measurement_ = measurement
+        self._problem = prob
+        return self
+
+    def _set_statistics(self, space, prob, free, params, best, u, J) -> None:
+        """Fitted values, standard errors, correlations, flags and fit figures at the kept optimum."""
         self.names_ = list(space.reported)
         self.values_ = {k: float(best.values[k]) for k in self.names_}
         r = prob.residual(best.run)
@@ -635,17 +812,11 @@ class Calibration:
         self.fit_percent_ = prob.fits(best.run)
         self.rss_ = prob.rss(best.run)
         self.n_ = {c: int(prob.mask.sum()) for c in CHANNELS}
-        self.bic_ = bic(self.rss_, self.n_, p)
+        self.step_ = getattr(best.run, "step", None)
+        self.bic_ = bic(self.rss_, self.n_, p + (2 if self.abrupt_step is not None else 0))
         self.cost_ = best.cost
-        self.nfev_ = nfev
         self.n_failed_ = prob.n_failed
         self.run_ = best.run
-        self.experiment_ = exp
-        self.scales_ = scales
-        self.message_ = str(msg)
-        self.measurement_ = measurement
-        self._problem = prob
-        return self
 
     @staticmethod
     def _coord_owner(space, j) -> str:
@@ -753,30 +924,69 @@ class Calibration:
                 "bic": self.bic_, "n_runs": self.nfev_, "n_failed_runs": self.n_failed_, "message": self.message_}
 
 
-def _default_starts(names, vals) -> list[dict]:
-    """A small grid over mu_c, mu_s (as mu_s/mu_c) and m_v, for those being fitted."""
-    import itertools
+def default_starts(names, vals) -> list[dict]:
+    """Starting points over the friction regimes and the burden's mass and inertia, for those being fitted.
 
-    axes = []
-    if "mu_c" in names:
-        axes.append([{"mu_c": f * vals["mu_c"]} for f in (0.7, 0.85, 1.0, 1.15, 1.3)])
-    if "mu_s" in names:
-        axes.append([{"_ratio": r} for r in (1.02, 1.15, 1.3, 1.5, 1.7)])
-    if "m_v" in names:
-        axes.append([{"m_v": f * vals["m_v"]} for f in (0.9, 1.0, 1.1)])
-    if "J_v" in names:  # sets the burden's oscillation frequency: its phase over a record is rugged
-        axes.append([{"J_v": f * vals["J_v"]} for f in (0.7, 0.85, 1.0, 1.2, 1.4)])
-    if not axes:
-        return []
+    The friction pair is crossed in full (mu_c x 0.7 ... 1.3 by mu_s/mu_c
+    1.02 ... 1.7: the printed law's regimes, held or sliding or stick-slip,
+    are separate valleys of the cost).  The burden mass (x 0.9, 1, 1.1) and
+    inertia (x 0.7 ... 1.4, which sets the phase of its oscillation) are
+    not crossed with it and with each other in full but laid over the
+    friction grid as a Latin square (level (i + j) mod 3 and (i + 2 j) mod 5
+    at friction point (i, j)): every level of each appears with every level
+    of mu_c and of the ratio, in 25 points instead of 375.
+
+    Parameters
+    ----------
+    names : sequence of str
+        Names of the fitted values.
+    vals : dict of str to float
+        Their given values [units of each]; the grid is relative to them.
+
+    Returns
+    -------
+    list of dict
+        Starting points [units of each].
+    """
+    f_c = (0.7, 0.85, 1.0, 1.15, 1.3) if "mu_c" in names else (None,)
+    ratios = (1.02, 1.15, 1.3, 1.5, 1.7) if "mu_s" in names else (None,)
+    f_m = (0.9, 1.0, 1.1)
+    f_j = (0.7, 0.85, 1.0, 1.2, 1.4)
     out = []
-    for combo in itertools.product(*axes):
-        d = {}
-        for part in combo:
-            d.update(part)
-        if "_ratio" in d:
-            d["mu_s"] = d.pop("_ratio") * d.get("mu_c", vals.get("mu_c", 0.4))
-        out.append(d)
+    if f_c == (None,) and ratios == (None,):  # no friction: the mass and inertia levels alone
+        ms = [{"m_v": f * vals["m_v"]} for f in f_m] if "m_v" in names else [{}]
+        js = [{"J_v": f * vals["J_v"]} for f in f_j] if "J_v" in names else [{}]
+        return [dict(a, **b) for a in ms for b in js if a or b]
+    for i, fc in enumerate(f_c):
+        for j, r in enumerate(ratios):
+            d = {}
+            if fc is not None:
+                d["mu_c"] = fc * vals["mu_c"]
+            if r is not None:
+                d["mu_s"] = r * d.get("mu_c", vals.get("mu_c", 0.4))
+            if "m_v" in names:
+                d["m_v"] = f_m[(i + j) % 3] * vals["m_v"]
+            if "J_v" in names:
+                d["J_v"] = f_j[(i + 2 * j) % 5] * vals["J_v"]
+            out.append(d)
     return out
+
+
+def _forward_jacobian(fun, u, step, upper, cols=None) -> np.ndarray:
+    """Jacobian of the residual by forward differences (backward at an upper bound), scaled step ``step``;
+    only the columns ``cols`` (a boolean mask; default all), the others zero."""
+    r0 = fun(u)
+    J = np.zeros((r0.size, u.size))
+    for j in range(u.size):
+        if cols is not None and not cols[j]:
+            continue
+        h = step * max(1.0, abs(u[j]))
+        if u[j] + h > upper[j]:
+            h = -h
+        up = u.copy()
+        up[j] += h
+        J[:, j] = (fun(up) - r0) / h
+    return J
 
 
 def _covariance(J, s2, G):

@@ -23,6 +23,7 @@ The procedure (``docs/tutorial_diagnose.md``):
 
 from __future__ import annotations
 
+import copy
 import math
 import time
 from dataclasses import dataclass, field
@@ -34,10 +35,10 @@ from ..params import Parameters
 from ..simulate import resolve_gains
 from .calibrate import Calibration, holdout_masks
 from .compare import Comparison, compare_run
-from .effects import CATALOGUE, effect_components, grid_starts
+from .effects import CATALOGUE, DEFAULT_CALIBRATE, effect_components, grid_starts
 from .io import Measurement
 from .runner import CHANNELS, kiln_angle
-from .stats import failing_intervals, fit_percent, residual_spectrum, robust_sigma
+from .stats import best_step, failing_intervals, fit_percent, residual_spectrum, robust_sigma
 from . import report as _report
 from .report import format_fit as _fmt_fit, json_number as _num, unit_of as _unit
 
@@ -50,9 +51,6 @@ MIN_HELDOUT_SHARE = 0.1
 #: a refit of the current structure from a candidate's base values replaces the current model when it lowers
 #: the cost by more than this fraction [-] (see Diagnosis._reanchor)
 REANCHOR_GAIN = 1e-3
-#: base parameters calibrated by default: the paper's friction study (Fig. 4) plus the burden mass and inertia
-#: (the paper blames both for its mismatch of the oscillation frequency)
-DEFAULT_CALIBRATE = ("mu_c", "mu_s", "m_v", "J_v")
 
 
 @dataclass
@@ -154,6 +152,9 @@ class Diagnosis:
     n_local : int, default 3
         Local fits per candidate, from the best starting points of its grid
         that lie apart (see :meth:`Calibration.fit`).
+    workers : int, default 1
+        Processes that refit the candidates of a round in parallel (each
+        refit is deterministic: the result does not depend on it).
 
     Attributes
     ----------
@@ -178,6 +179,15 @@ class Diagnosis:
         shorter than a kiln revolution (there it is a slow drift, like a
         sensor offset), or evidence that is weak once the residual's
         autocorrelation is allowed for.
+    final_search_ : dict
+        How the final structure was refitted: ``n_starts`` (starting points
+        compared by cost), ``n_local_fits``, their final ``costs`` [-] and
+        current ``fit_current_percent`` [%], and the ``kept_cost`` (the
+        lowest: the fit reported).
+    abrupt_ : dict or None
+        An abrupt change outside the catalogue that explained the record
+        better than every supported candidate (``t`` [s], ``size_A`` [A],
+        ``delta_bic``, ``text``), or None.
     unexplained_ : dict or None
         Signature of what the final model still misses, or None.
     wall_s_ : float
@@ -187,7 +197,7 @@ class Diagnosis:
     def __init__(self, params: Parameters | None = None, calibrate=DEFAULT_CALIBRATE, candidates=None, *,
                  model: str = "macro", holdout: str = "blocks", holdout_fraction: float = 0.3,
                  min_delta_bic: float = 10.0, min_holdout_gain: float = 2.0, max_effects: int = 3,
-                 t0: float | None = None, max_nfev: int = 60, n_local: int = 3):
+                 t0: float | None = None, max_nfev: int = 60, n_local: int = 3, workers: int = 1):
         self.params = Parameters() if params is None else params
         self.calibrate = tuple(calibrate)
         if candidates is not None:
@@ -204,6 +214,9 @@ class Diagnosis:
         self.t0 = t0
         self.max_nfev = max_nfev
         self.n_local = n_local
+        if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+            raise ModelError(f"workers = {workers!r} must be a positive integer (processes refitting candidates)")
+        self.workers = workers
 
     # --- structure of a model: base model + effects ------------------------------------
     def _structure(self, params, effects):
@@ -219,22 +232,31 @@ class Diagnosis:
         return model, comps, p, free
 
     def _calibrate(self, m, params, effects, scales, mask, init, starts=(), experiment=None,
-                   first_failure=None, new_effect=None) -> Calibration:
+                   first_failure=None, new_effect=None, n_local=None) -> Calibration:
         model, comps, p, free = self._structure(params, effects)
         cal = Calibration(p, free, model=model, effects=comps, scales=scales, t0=self.t0, max_nfev=self.max_nfev)
-        horizons = [1.0]
-        hz = CATALOGUE[new_effect].horizons if new_effect else (1.0,)
-        if hz == "after_first_failure":
-            if first_failure is not None:  # then in steps of 5 % of the record: a cycle at a time
-                h1 = min(1.0, max(0.3, first_failure))
-                horizons = sorted(set(np.round(np.append(np.arange(h1, 1.0, 0.05), 1.0), 4)))
-        else:
-            horizons = sorted(set(hz) | {1.0})
-        sep = CATALOGUE[new_effect].separation if new_effect else 1.0
-        # the smoothing widths of every effect in the structure (their events must stay aligned in every refit)
-        smoothing = tuple(sorted({w for e in effects for w in CATALOGUE[e].smoothing}, reverse=True)) or (0.0,)
+        horizons, smoothing, sep = _schedule(effects, first_failure)
+        if n_local is None:
+            n_local = self.n_local if new_effect else 1
         return cal.fit(m, mask=mask, init=init, starts=list(starts), experiment=experiment, horizons=horizons,
-                       n_local=self.n_local if new_effect else 1, separation=sep, smoothing=smoothing)
+                       n_local=n_local, separation=sep, smoothing=smoothing)
+
+    def _final_fit(self, m, params, selected, current, exp) -> Calibration:
+        """The selected structure refitted on the whole record from several starts; the lowest cost is kept.
+
+        Starts: the greedy search's values (fitted on the fitting part, with other weights), the setup's base
+        values, and a spread over the friction regimes (mu_c x 0.8, 1, 1.25 by mu_s/mu_c from 1.02 to 2.2,
+        geometric): where stick-slip makes the cost rugged a single local fit stops in the first valley it
+        meets.  The local fits and their costs are kept in ``local_fits_`` of the calibration.
+        """
+        init = dict(current.values_)
+        starts = [{k: float(params[k]) for k in self.calibrate}]
+        if "mu_c" in self.calibrate and "mu_s" in self.calibrate:
+            mu_c = init.get("mu_c", params.mu_c)
+            starts += [{"mu_c": f * mu_c, "mu_s": f * mu_c * r} for f in (0.8, 1.0, 1.25)
+                       for r in np.geomspace(1.02, 2.2, 6)]
+        return self._calibrate(m, params, selected, "std", None, init, starts, experiment=exp,
+                               first_failure=self._first_failure(m, current, exp), n_local=self.n_local + 1)
 
     @staticmethod
     def _first_failure(m, cal, exp):
@@ -283,10 +305,20 @@ class Diagnosis:
             scales[c] = max(float(np.sqrt(np.mean(e ** 2))), 1e-3 * float(np.std(m.channels[c][active])), 1e-12)
         train, test = holdout_masks(m, self.holdout, self.holdout_fraction, t0=exp.t0)
         current = self._calibrate(m, params, (), scales, train, base.values_, experiment=exp)
+        self.abrupt_ = None
+        pool = _pool(self.workers)
+        try:
+            return self._search(m, params, exp, base, scales, train, test, current, pool, say, wall0)
+        finally:
+            if pool is not None:
+                pool.shutdown(wait=True, cancel_futures=True)
+
+    def _search(self, m, params, exp, base, scales, train, test, current, pool, say, wall0):
+        """Greedy rounds of candidates, then the final refit (see :meth:`fit`)."""
         selected: list[str] = []
         rounds = []
         while len(selected) < self.max_effects:
-            results = []
+            names = []
             for name in self.candidates:
                 if name in selected:
                     continue
@@ -295,13 +327,15 @@ class Diagnosis:
                 if why is not None or (eff.model is not None and any(CATALOGUE[s].model not in (None, eff.model)
                                                                      for s in selected)):
                     continue
-                results.append(self._try(m, params, selected, name, current, scales, train, test, exp))
-                r = results[-1]
-                say(f"  {name:<22} dBIC {r.delta_bic:+10.1f}  held-out gain {r.holdout_gain:+6.1f} %  "
-                    f"{'supported' if r.supported else '-'}")
+                names.append(name)
+            results = self._try_all(m, params, selected, names, current, scales, train, test, exp, pool, say)
             results.sort(key=lambda r: (not r.supported, r.delta_bic if math.isfinite(r.delta_bic) else math.inf))
             current, results = self._reanchor(m, params, selected, current, results, scales, train, test, exp, say)
+            abrupt = self._outside(m, params, selected, current, results, scales, train, test, exp, say)
             rounds.append(results)
+            if abrupt is not None:
+                self.abrupt_ = abrupt
+                break
             if not results or not results[0].supported:
                 break
             best = results[0]
@@ -309,12 +343,10 @@ class Diagnosis:
             current = best.calibration
             say(f"added {best.effect}")
         # final model on the whole record
-        if selected:
-            final = self._calibrate(m, params, tuple(selected), "std", None, current.values_, experiment=exp)
-        else:
-            final = base
+        final = self._final_fit(m, params, tuple(selected), current, exp) if selected else base
         self.base_calibration_ = base
         self.final_calibration_ = final
+        self.final_search_ = _search_summary(final)
         self.baseline_ = dict(base.fit_percent_)
         self.final_ = dict(final.fit_percent_)
         self.rounds_ = rounds
@@ -325,8 +357,13 @@ class Diagnosis:
         fm, fcomps, _, _ = self._structure(params, tuple(selected))
         self.comparison_final_ = compare_run(m, final.run_, exp, model=fm, effects=tuple(selected),
                                              params=final.params_)
-        self.signature_ = residual_signature(self.comparison_final_, params.n)
+        steady = exp.t0 + (exp.omega_ref / exp.ramp_rate if exp.ramp_rate > 0 else 0.0) + 1.5
+        self.signature_ = residual_signature(self.comparison_final_, params.n, steady_from=steady)
         self.unexplained_ = self.signature_ if self.signature_["structured"] else None
+        if self.abrupt_ is not None:
+            self.unexplained_ = dict(self.signature_, structured=True, hint=self.abrupt_["text"],
+                                     abrupt_change={k: v for k, v in self.abrupt_.items() if k != "text"},
+                                     text=f"{self.abrupt_['text']}. {self.signature_['text']}")
         self.caveats_ = self._caveats(m, exp, params)
         self.measurement_ = m
         self.wall_s_ = time.perf_counter() - wall0
@@ -346,13 +383,24 @@ class Diagnosis:
             period = eff.period(params, exp.omega_ref) if eff.period is not None else None
             out += caution_texts(name, span, period, eff.short_record_note, r.delta_bic_corrected,
                                  self.min_delta_bic)
+            for note in eff.plausibility(self.final_calibration_.values_):
+                out.append(f"{name}: {note} (a value outside the usual range is reported, not refused)")
         return out
 
-    def _try(self, m, params, selected, name, current, scales, train, test, exp) -> CandidateResult:
+    def _refit(self, m, params, selected, name, current_values, first_failure, scales, train, exp):
+        """Refit base + ``selected`` + ``name`` on the fitting part (in a worker process when workers > 1).
+
+        Returns
+        -------
+        (Calibration or None, str or None, float)
+            The refit, or the reason it failed, and its wall time [s].
+        """
         eff = CATALOGUE[name]
         effects = tuple(selected) + (name,)
         t_start = time.perf_counter()
-        init = dict(current.values_)
+        # from the current model with the effect at its null value: the refit then never ends worse than the
+        # current model (Calibration.fit keeps its starting values when no local fit improves on them)
+        init = dict(current_values, **(eff.null or {}))
         model, comps, p, free = self._structure(params, effects)
         # global phase: a coarse grid over the effect's parameters (base at its calibrated values),
         # since output-error costs of impacts and stick-slip cycles have many local minima
@@ -361,21 +409,45 @@ class Diagnosis:
             # the law changes what mu_s means.  The first breakaway (set by mu_s alone) is sharp, so the cost
             # has a narrow valley along mu_s = const: a fine grid in mu_s, a coarse one in mu_c
             mu_c = init.get("mu_c", p.mu_c)
-            effect_starts = [{"mu_c": f * mu_c, "mu_s": f * mu_c * r} for f in (0.85, 0.92, 1.0, 1.08, 1.15)
-                             for r in np.geomspace(1.02, 2.2, 80)]
+            effect_starts = [{"mu_c": f * mu_c, "mu_s": f * mu_c * r} for f in (0.9, 1.0, 1.1)
+                             for r in np.geomspace(1.02, 2.2, 30)]
         # the base values from the current model and from the setup: the current model's calibration may sit
         # in a regime (e.g. of the burden friction) that only made up for the missing effect
         setup_base = {k: float(params[k]) for k in self.calibrate if k in init}
-        variants = [{}, setup_base] if any(abs(setup_base[k] - init[k]) > 1e-9 * abs(init[k]) for k in setup_base) \
-            else [{}]
-        starts = [dict(v, **g) for v in variants for g in (effect_starts or [{}])]
+        starts = [dict(g) for g in (effect_starts or [{}])]
+        if any(abs(setup_base[k] - init[k]) > 1e-9 * abs(init[k]) for k in setup_base):
+            # every second grid point again with the setup's base values
+            starts += [dict(setup_base, **g) for g in (effect_starts or [{}])[::2]]
         try:
             cal = self._calibrate(m, params, effects, scales, train, init, starts, experiment=exp,
-                                  first_failure=self._first_failure(m, current, exp), new_effect=name)
+                                  first_failure=first_failure, new_effect=name)
         except KilnctlError as exc:
-            return CandidateResult(name, math.inf, -math.inf, {}, {}, {}, [], [], False,
-                                   f"could not be fitted: {exc}", time.perf_counter() - t_start)
-        return self._evidence(m, name, cal, current, scales, train, test, exp, time.perf_counter() - t_start)
+            return None, f"could not be fitted: {exc}", time.perf_counter() - t_start
+        return cal, None, time.perf_counter() - t_start
+
+    def _try_all(self, m, params, selected, names, current, scales, train, test, exp, pool, say):
+        """Refit every candidate of a round (in parallel when a pool is given) and judge each one."""
+        ff = self._first_failure(m, current, exp)
+        args = [(m, params, tuple(selected), name, dict(current.values_), ff, scales, train, exp) for name in names]
+        if pool is not None and len(names) > 1:
+            # slowest first (the micro model, stick-slip), so that two workers finish together
+            order = sorted(range(len(names)), key=lambda i: -_COST_RANK.get(names[i], 1))
+            light = copy.copy(self)  # the settings only: a Diagnosis fitted before carries its results
+            light.__dict__ = {k: v for k, v in self.__dict__.items() if not k.endswith("_")}
+            futures = {i: pool.submit(_refit_job, (light, args[i])) for i in order}
+            outs = [futures[i].result() for i in range(len(names))]
+        else:
+            outs = [self._refit(*a) for a in args]
+        results = []
+        for name, (cal, error, wall) in zip(names, outs):
+            if cal is None:
+                r = CandidateResult(name, math.inf, -math.inf, {}, {}, {}, [], [], False, error, wall)
+            else:
+                r = self._evidence(m, name, cal, current, scales, train, test, exp, wall)
+            results.append(r)
+            say(f"  {name:<22} dBIC {r.delta_bic:+10.1f}  held-out gain {r.holdout_gain:+6.1f} %  "
+                f"{'supported' if r.supported else '-'}")
+        return results
 
     def _evidence(self, m, name, cal, current, scales, train, test, exp, wall_s) -> CandidateResult:
         """Judge a refitted candidate against the current model: delta BIC and the held-out gain."""
@@ -408,10 +480,65 @@ class Diagnosis:
             reason = f"BIC does not improve enough (dBIC {dbic:+.1f} >= {-self.min_delta_bic:g})"
         else:
             reason = f"BIC improves but not out of sample ({why_gain}): likely fitting noise"
+        supported = ok_bic and ok_gain
         pars = {k: {"value": cal.values_[k], "stderr": cal.stderr_[k], "unit": _unit(k)} for k in cal.names_}
         return CandidateResult(name, float(dbic), float(gain), dict(cal.fit_percent_), hfit, pars,
-                               list(cal.on_bound_), list(cal.not_identifiable_), ok_bic and ok_gain, reason,
+                               list(cal.on_bound_), list(cal.not_identifiable_), supported, reason,
                                wall_s, cal, float(seen), float(dbic_corr))
+
+    def _outside(self, m, params, selected, current, results, scales, train, test, exp, say):
+        """Test the hypothesis of an abrupt change outside the catalogue against the round's best candidate.
+
+        Once the drive runs at its set speed no catalogued effect makes a single step in the current (the
+        torque friction law makes a train of them); a load step, a process upset or a sensor fault does, and a
+        smooth effect (a slow unbalance) can imitate part of it with implausible values.  The current
+        structure is refitted with a step b H(t - tau) of the current added (tau from 1.5 s after the ramp's
+        end to 2 s before the record's end; b and tau in closed form at every trial) and judged like a
+        candidate.  When it is supported and its BIC is lower than that of every supported candidate, those
+        candidates are rejected with that reason, the search stops, and the step is reported as unexplained.
+
+        Returns
+        -------
+        dict or None
+            ``t`` [s], ``size_A`` [A], ``delta_bic`` and ``text`` of the step when it wins, else None.
+        """
+        supported = [r for r in results if r.supported]
+        if not supported:
+            return None
+        active = m.t >= exp.t0 - 1e-9
+        t = m.t[active]
+        ramp_end = exp.t0 + (exp.omega_ref / exp.ramp_rate if exp.ramp_rate > 0 else 0.0)
+        window = (ramp_end + 1.5, float(t[-1]) - 2.0)
+        if window[1] <= window[0]:
+            return None
+        model, comps, p, free = self._structure(params, tuple(selected))
+        horizons, smoothing, sep = _schedule(tuple(selected), None)
+        t_start = time.perf_counter()
+        try:
+            cal = Calibration(p, free, model=model, effects=comps, scales=scales, t0=self.t0,
+                              max_nfev=self.max_nfev, abrupt_step=window).fit(
+                m, mask=train, init=dict(current.values_), starts=[], experiment=exp, horizons=horizons,
+                n_local=1, smoothing=smoothing)
+        except KilnctlError:
+            return None
+        if cal.step_ is None:
+            return None
+        step = self._evidence(m, "abrupt change", cal, current, scales, train, test, exp,
+                              time.perf_counter() - t_start)
+        best = supported[0]
+        if not step.supported or not step.delta_bic < best.delta_bic:
+            return None
+        size = cal.step_["size"] * 1.0
+        text = (f"an abrupt change at t = {cal.step_['t']:.1f} s: the current steps by {size:+.0f} A while the drive "
+                "runs at its set speed, which no catalogued effect does (a load step, a process upset, a sensor "
+                "fault)")
+        for r in supported:
+            r.supported = False
+            r.reason = (f"{text}; it explains the record better (dBIC {step.delta_bic:+.1f} against "
+                        f"{r.delta_bic:+.1f}): this effect only imitates part of it")
+        say(f"  abrupt change at t = {cal.step_['t']:.1f} s  dBIC {step.delta_bic:+10.1f}  "
+            f"held-out gain {step.holdout_gain:+6.1f} %  better than every candidate")
+        return {"t": cal.step_["t"], "size_A": size, "delta_bic": step.delta_bic, "text": text}
 
     def _reanchor(self, m, params, selected, current, results, scales, train, test, exp, say):
         """Make sure the best supported candidate's gain comes from its effect, not from its base values.
@@ -435,7 +562,8 @@ class Diagnosis:
             tried.add(best.effect)
             init = {k: v for k, v in best.calibration.values_.items() if k in current.values_}
             try:
-                again = self._calibrate(m, params, tuple(selected), scales, train, init, experiment=exp)
+                again = self._calibrate(m, params, tuple(selected), scales, train, init, experiment=exp,
+                                        first_failure=self._first_failure(m, current, exp))
             except KilnctlError:
                 continue
             if again.cost_ >= current.cost_ * (1 - REANCHOR_GAIN):
@@ -573,6 +701,72 @@ class Diagnosis:
         return _report.diagnosis_html(self, figs)
 
 
+#: relative cost of refitting a candidate (the micro model at 1 ms, stick-slip horizons): the slowest start first
+_COST_RANK = {"backlash": 4, "torque_friction_law": 3, "drivetrain_compliance": 2}
+
+
+def _pool(workers: int):
+    """A process pool of ``workers`` spawned processes, or None for one."""
+    if workers <= 1:
+        return None
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    # spawn: clean workers (no inherited threads or locks); each builds its model structures once
+    return ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"))
+
+
+def _refit_job(job):
+    """Worker side of Diagnosis._refit: the refit without what need not travel back (the raw simulation)."""
+    diag, args = job
+    cal, error, wall = diag._refit(*args)
+    if cal is not None:
+        cal._problem = None
+        cal.run_.response = None
+    return cal, error, wall
+
+
+def _search_summary(cal: Calibration) -> dict:
+    """How the search for a calibration went: starting points compared, local fits run, and their spread."""
+    fits = getattr(cal, "local_fits_", [])
+    costs = sorted(f["cost"] for f in fits)
+    cur = [f["fit_percent"].get("current_A", math.nan) for f in fits]
+    return {"n_starts": int(getattr(cal, "n_starts_", 1)), "n_local_fits": len(fits),
+            "costs": [float(c) for c in costs], "fit_current_percent": sorted((float(c) for c in cur), reverse=True),
+            "kept_cost": float(cal.cost_)}
+
+
+def _schedule(effects, first_failure):
+    """Horizons, smoothing widths and start separation for refitting a structure (base + ``effects``).
+
+    Every effect of the structure contributes, not only the one just added: a structure that holds the
+    torque friction law has a rugged cost on a long record (each stick-slip cycle shifts the next) whatever
+    else is refitted with it, and the events of a backlash impact or a breakaway must stay aligned in every
+    refit.  ``after_first_failure``: from 1 s after the current model's first failing interval (at least
+    30 % of the record; 30 % when it has none) to the whole record in steps of 5 %.
+
+    Returns
+    -------
+    horizons : list of float
+        Fractions of the record [-], growing, ending with 1.
+    smoothing : tuple of float
+        Moving-average widths [s], widest first.
+    separation : float
+        Least scaled distance between starting points of local fits [-].
+    """
+    horizons = {1.0}
+    for e in effects:
+        hz = CATALOGUE[e].horizons
+        if hz == "after_first_failure":
+            h1 = 0.3 if first_failure is None else min(1.0, max(0.3, first_failure))
+            horizons |= set(np.round(np.append(np.arange(h1, 1.0, 0.05), 1.0), 4))
+        else:
+            horizons |= set(hz)
+    smoothing = tuple(sorted({w for e in effects for w in CATALOGUE[e].smoothing}, reverse=True)) or (0.0,)
+    separation = min([CATALOGUE[e].separation for e in effects] or [1.0])
+    return sorted(float(h) for h in horizons), smoothing, separation
+
+
 def caution_texts(effect: str, span_s: float, period_s: float | None, short_record_note: str,
                   delta_bic_corrected: float, min_delta_bic: float) -> list[str]:
     """The cautions a user reads about one selected effect (empty when there is nothing to say).
@@ -667,7 +861,7 @@ def _corrected_delta_bic(m, cal, current, exp, train) -> float:
 
 
 # --- residual signature --------------------------------------------------------------------------
-def residual_signature(comp: Comparison, n: float) -> dict:
+def residual_signature(comp: Comparison, n: float, steady_from: float | None = None) -> dict:
     """Describe what a model still misses: frequency, correlations, where.
 
     The current residual is regressed on signals that name kinds of physics:
@@ -685,6 +879,11 @@ def residual_signature(comp: Comparison, n: float) -> dict:
         Comparison of the final model with the record.
     n : float
         Total reduction motor to kiln [-] (for the kiln angle).
+    steady_from : float, optional
+        Time from which the drive runs at its set speed [s] (record time):
+        from there on the best single step of the residual is a further
+        regressor (no catalogued effect makes one; a load step or a process
+        upset does).
 
     Returns
     -------
@@ -718,6 +917,11 @@ def residual_signature(comp: Comparison, n: float) -> dict:
         beta, *_ = np.linalg.lstsq(X, e, rcond=None)
         res = e - X @ beta
         r2[k] = float(1.0 - (res @ res) / var) if var > 0 else 0.0
+    step = best_step(t, e, t_min=steady_from, t_max=t[-1] - 2.0) if steady_from is not None else None
+    step_key = None
+    if step is not None and var > 0:
+        step_key = f"an abrupt change at t = {step['t']:.1f} s"
+        r2[step_key] = float(1.0 - step["rss"] / var)
     strongest = max(r2, key=r2.get)
     spec = ch.spectrum
     # a failing interval counts when it lasts (>= 0.5 s) or goes far out (> 5 sigma): a coloured-noise
@@ -740,6 +944,10 @@ def residual_signature(comp: Comparison, n: float) -> dict:
         "current": "something that depends on the current level (a limit, saturation, sensor scale)",
         "speed error": "a controller or speed-sensor difference (gains, filter, lag)",
     }
+    if step_key is not None:
+        hints[step_key] = (f"a change outside the catalogue: a step of {step['size']:+.0f} A in the current at "
+                           f"t = {step['t']:.1f} s while the drive runs at its set speed (a load step, a process "
+                           "upset, a sensor fault)")
     if peaked and r2[strongest] <= 0.25:
         hint = (f"an oscillation near {spec['narrowband_hz']:.2f} Hz: a resonance (torsional mode, burden "
                 f"pendulum near 0.34 Hz) or a loop that is less damped than modelled")

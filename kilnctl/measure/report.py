@@ -315,6 +315,7 @@ def diagnosis_dict(d) -> dict:
         "selected": list(d.selected_),
         "final": {k: json_number(v) for k, v in d.final_.items()},
         "final_parameters": _params_dict(fc),
+        "final_search": dict(getattr(d, "final_search_", {})),
         "unexplained": _jsonable(d.unexplained_),
         "caveats": list(d.caveats_),
         "residual_signature": _jsonable(d.signature_),
@@ -381,6 +382,10 @@ def diagnosis_summary(d) -> str:
                          f"{'SUPPORTED' if r.supported else r.reason}")
     lines.append(f"  selected: {', '.join(d.selected_) or 'nothing'}")
     lines.append(f"  final: {format_fit(d.final_)}")
+    fs = getattr(d, "final_search_", None)
+    if fs and fs["n_local_fits"]:
+        lines.append(f"  final refit: the best of {fs['n_local_fits']} local fits from {fs['n_starts']} starting "
+                     "points; their current fits " + ", ".join(f"{v:.1f}" for v in fs["fit_current_percent"]) + " %")
     lines.append("  " + diagnosis_headline(d))
     if d.unexplained_:
         lines.append("  unexplained residual: " + d.unexplained_["text"])

@@ -42,19 +42,34 @@ class ModelRun:
         The simulator's mode switches (times relative to ``t0``).
     response : kilnctl.response.Response
         The raw simulation.
+    step : dict or None
+        An abrupt step added to the current by a calibration that allows one
+        (see :class:`~kilnctl.measure.calibrate.Calibration`, ``abrupt_step``).
     """
 
     t: np.ndarray
     outputs: dict
     events: list
     response: object
+    step: dict | None = None
+
+
+def _last_of_each_time(t) -> np.ndarray:
+    """Indices that keep the last sample at each duplicated time (the state after a switch), in time order.
+
+    The simulator's times never decrease, so a duplicate is equal to its successor.
+    """
+    t = np.asarray(t, float)
+    if t.size and np.all(np.diff(t) >= 0):
+        return np.nonzero(np.append(t[1:] != t[:-1], True))[0]
+    rev = t[::-1]
+    _, idx = np.unique(rev, return_index=True)
+    return len(t) - 1 - idx
 
 
 def _unique(t, y):
     """Keep the last value at each duplicated time (the state after a switch)."""
-    rev = t[::-1]
-    _, idx = np.unique(rev, return_index=True)
-    keep = len(t) - 1 - idx
+    keep = _last_of_each_time(t)
     return t[keep], y[keep]
 
 
@@ -119,14 +134,14 @@ def run_model(params: Parameters, measurement: Measurement, experiment: Experime
                     max_events=max_events)
     ts = np.asarray(resp.t, dtype=float)
     rel = t - experiment.t0
+    keep = _last_of_each_time(ts)  # one index for every signal of the run
+    tu = ts[keep]
     out = {}
     for col, (name, _unit) in CHANNELS.items():
-        tu, yu = _unique(ts, np.asarray(resp.outputs[name], dtype=float))
-        out[col] = np.interp(rel, tu, yu)
+        out[col] = np.interp(rel, tu, np.asarray(resp.outputs[name], dtype=float)[keep])
     for name, key in (("speed_ref_rpm", "speed_ref_rpm"), ("psi", "psi"), ("kiln_rpm", "kiln_rpm")):
         if key in resp.outputs:
-            tu, yu = _unique(ts, np.asarray(resp.outputs[key], dtype=float))
-            out[name] = np.interp(rel, tu, yu)
+            out[name] = np.interp(rel, tu, np.asarray(resp.outputs[key], dtype=float)[keep])
     if not all(np.all(np.isfinite(v)) for v in out.values()):
         raise KilnctlError("the model produced non-finite outputs")
     return ModelRun(t=t, outputs=out, events=list(resp.events), response=resp)

@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-__all__ = ["fit_percent", "autocorr", "crosscorr", "residual_spectrum", "failing_intervals",
+__all__ = ["fit_percent", "autocorr", "crosscorr", "residual_spectrum", "failing_intervals", "best_step",
            "robust_sigma", "Z99"]
 
 #: two-sided 99 % quantile of the standard normal distribution
@@ -217,3 +217,59 @@ def failing_intervals(t, e, *, k_sigma: float = 3.0, merge_s: float | None = Non
         else:
             groups.append([k, k, 1])
     return [(int(a), int(b)) for a, b, c in groups if c >= min_samples]
+
+
+def best_step(t, e, *, t_min: float | None = None, t_max: float | None = None,
+              intercept: bool = True) -> dict | None:
+    """The step e ~ a + b H(t - tau) that fits a residual best, by least squares over every sample time tau.
+
+    For a split at sample k the best levels are the means of the two sides,
+    and the residual sum of squares is sum(e^2) - S_L^2/n_L - S_R^2/n_R with
+    S and n the sums and counts of the sides (without the S_L term when the
+    level before is held at 0); all splits cost O(N) with cumulative sums.
+
+    Parameters
+    ----------
+    t : array_like
+        Times [s], increasing.
+    e : array_like
+        Residual [unit].
+    t_min, t_max : float, optional
+        Earliest and latest step times tried [s] (default: the record, less
+        three samples at either end).
+    intercept : bool, default True
+        Fit the level before the step (``a``); False: a = 0 (a change of a
+        residual that is zero before it).
+
+    Returns
+    -------
+    dict or None
+        ``t`` (step time [s], the first sample after the step), ``index``,
+        ``size`` (b [unit]), ``before`` (a [unit]), ``rss`` [unit^2] and
+        ``rss_constant`` (of the best constant) [unit^2]; None when no step
+        time is allowed.
+    """
+    t = np.asarray(t, float)
+    e = np.asarray(e, float)
+    n = e.size
+    if n < 6:
+        return None
+    k = np.arange(3, n - 2)  # split before sample k: left = e[:k], right = e[k:]
+    ok = np.ones(k.size, bool)
+    if t_min is not None:
+        ok &= t[k] >= t_min
+    if t_max is not None:
+        ok &= t[k] <= t_max
+    if not ok.any():
+        return None
+    k = k[ok]
+    c = np.concatenate([[0.0], np.cumsum(e)])
+    s_l, s_r = c[k], c[-1] - c[k]
+    n_l, n_r = k.astype(float), (n - k).astype(float)
+    total = float(e @ e)
+    rss = total - s_r ** 2 / n_r - (s_l ** 2 / n_l if intercept else 0.0)
+    j = int(np.argmin(rss))
+    kk = int(k[j])
+    a, b = (s_l[j] / n_l[j] if intercept else 0.0), s_r[j] / n_r[j]
+    return {"t": float(t[kk]), "index": kk, "size": float(b - a), "before": float(a), "rss": float(max(rss[j], 0.0)),
+            "rss_constant": float(total - c[-1] ** 2 / n)}
