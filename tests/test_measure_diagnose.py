@@ -87,9 +87,15 @@ def test_unfitted_and_unknown_candidate():
         Diagnosis(SETUP, candidates=["second_motr"])
 
 
-def test_diagnose_cli_json(tmp_path, capsys):
+@pytest.fixture(scope="module")
+def cli_run(tmp_path_factory):
+    """``kilnctl diagnose --json --report`` on a small record: (JSON output, report folder)."""
+    import contextlib
+    import io
+
     from kilnctl.cli import diagnose_cmd
 
+    tmp_path = tmp_path_factory.mktemp("cli")
     m, _ = make_record(("viscous_drag",), seed=8, magnitudes={"B_o": 6e6}, t_end=20.0)
     data = tmp_path / "rec.csv"
     m.to_csv(data)
@@ -98,12 +104,29 @@ def test_diagnose_cli_json(tmp_path, capsys):
                    '[measurement]\ncandidates = ["viscous_drag", "second_motor"]\n')
     ap = argparse.ArgumentParser()
     diagnose_cmd.register(ap.add_subparsers())
-    args = ap.parse_args(["diagnose", "--data", str(data), "--config", str(cfg), "--json"])
-    assert args.func(args) == 0
-    out = json.loads(capsys.readouterr().out)
+    args = ap.parse_args(["diagnose", "--data", str(data), "--config", str(cfg), "--json",
+                          "--report", str(tmp_path / "rep")])
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        assert args.func(args) == 0
+    return json.loads(buf.getvalue()), tmp_path / "rep"
+
+
+def test_diagnose_cli_json(cli_run):
+    out, _ = cli_run
     assert out["selected"] == ["viscous_drag"]
     # truth: B_o = 6e6 N m s/rad in the plant
     assert out["final_parameters"]["B_o"]["value"] == pytest.approx(6e6, rel=0.10)
+
+
+def test_diagnose_report_loads_in_a_browser(cli_run, load_in_chromium):
+    # the fast tier's browser check of diagnose.html: no errors, both figures decode, fits a 1300 px window
+    _, rep = cli_run
+    text = (rep / "diagnose.html").read_text()
+    assert "± inf" not in text and "{'" not in text and "How to read this" in text
+    page = load_in_chromium(rep / "diagnose.html")
+    assert page["errors"] == [] and page["broken_images"] == [] and page["images"] == 2
+    assert page["page_width"] <= 1300
 
 
 @pytest.mark.slow  # about 40 s (micro model calibration)
