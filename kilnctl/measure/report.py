@@ -840,14 +840,24 @@ def comparison_html(c, fig=None) -> str:
     model = f"{c.model} model" + (f" with {', '.join(c.effects)}" if c.effects else "")
     fits = " and ".join(f"the {names.get(k, k)} to {ch.fit:.1f} %" for k, ch in c.channels.items())
     fails = c.failing
-    head = f"The {model} reproduces {fits}. " + (
-        f"It fails beyond 3 sigma in {len(fails)} interval{'s' if len(fails) > 1 else ''}, the first "
-        f"{fails[0]['text']}." if fails else "Nowhere does its residual stay beyond 3 sigma.")
+    if not fails:
+        where = "Nowhere does its residual stay beyond 3 sigma."
+    elif len(fails) == 1:
+        f0 = fails[0]
+        where = f"It fails beyond 3 sigma in one interval: {names.get(f0['channel'], f0['channel'])} {f0['text']}."
+    else:
+        where = (f"It fails beyond 3 sigma in {len(fails)} intervals, the first: "
+                 f"{names.get(fails[0]['channel'], fails[0]['channel'])} {fails[0]['text']}.")
+    # bias = mean(measured - model): positive is a model too low
+    offsets = [f"the {names.get(k, k)} by {abs(ch.bias):.3g} {ch.unit} on average (model too "
+               f"{'low' if ch.bias > 0 else 'high'})" for k, ch in c.channels.items() if abs(ch.bias) > 0.5 * ch.rms]
+    head = f"The {model} reproduces {fits}. " + (f"It misses {' and '.join(offsets)}. " if offsets else "") + where
     parts = [f'<p class="big">{esc(head)}</p>', how_to_read(("fit", "sigma", "whiteness"))]
     rows = []
     for k, ch in c.channels.items():
         w = ch.whiteness
-        rows.append((names.get(k, k), f"{ch.fit:.1f}", f"{ch.rms:.3g}", f"{ch.bias:+.3g}", ch.unit,
+        bias = ch.bias if abs(ch.bias) >= 1e-3 * ch.rms else 0.0
+        rows.append((names.get(k, k), f"{ch.fit:.1f}", f"{ch.rms:.3g}", f"{bias:+.3g}", ch.unit,
                      f"{w['n_outside']} of {len(w['lags']) - 1}", f"{ch.spectrum['dominant_hz']:.2f}"))
     parts.append("<h2>Per channel</h2>" + table(["channel", "fit [%]", "residual rms", "bias", "unit",
                                                  "autocorrelation lags outside 99 % band",
