@@ -8,4 +8,4 @@ from .errors import KilnctlError
 from .params import Parameters
 
 __all__ = ["KilnctlError", "Parameters"]
-__version__ = "0.1.0"
+__version__ = "0.2.0"
