@@ -184,6 +184,8 @@ def run(args) -> int:
                               for v, val in o["argmax"].items())
             print(f"  {k:<18} min {_fmt(k, o['min'])}, mean {_fmt(k, o['mean'])}, max {_fmt(k, o['max'])} "
                   f"at {where}")
+    if result.worst_point is not None:
+        print(result.worst_point.describe(lambda v: _fmt(result.worst_point.output, v)), end="")
     if "exceedance" in s:
         e = s["exceedance"]
         print(f"  above {_fmt(result.outputs[0], threshold)}: {e['n_exceed']} of {e['n']} points, "

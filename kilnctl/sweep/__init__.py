@@ -19,6 +19,7 @@ Command line: ``kilnctl sweep SPEC.toml`` (format in :mod:`kilnctl.sweep.spec`).
 Needs the optional dependencies: ``pip install 'kilnctl[sweep]'``.
 """
 
+from .confirm import WorstPoint, confirm_worst
 from .engine import EXECUTORS, PointCache, SweepInterrupted, run_point, run_sweep
 from .limits import GIRTH_GEAR_HARDNESS_HB, allowable_bending_stress
 from .result import SweepResult, wilson_interval
@@ -31,5 +32,5 @@ __all__ = [
     "Uniform", "LogUniform", "Normal", "TruncNormal", "Triangular", "DISTRIBUTIONS",
     "load_spec", "study_from_dict", "SpecError", "METHODS", "OUTPUTS", "SIM_OPTIONS", "EXECUTORS",
     "PointCache", "run_point", "SweepInterrupted", "wilson_interval", "code_fingerprint",
-    "allowable_bending_stress", "GIRTH_GEAR_HARDNESS_HB",
+    "allowable_bending_stress", "GIRTH_GEAR_HARDNESS_HB", "WorstPoint", "confirm_worst",
 ]

@@ -253,7 +253,8 @@ def _progress(total: int, name: str, enabled: bool, cached: int):
                 postfix={"cached": cached} if cached else None)
 
 
-def run_sweep(study, executor=None, *, workers: int | None = None, cache=None, progress: bool = True):
+def run_sweep(study, executor=None, *, workers: int | None = None, cache=None, progress: bool = True,
+              confirm: bool = True):
     """Run every point of a study in parallel and return the labelled result table.
 
     Parameters
@@ -274,6 +275,11 @@ def run_sweep(study, executor=None, *, workers: int | None = None, cache=None, p
         resumes.  None: no cache.
     progress : bool, default True
         Show a progress bar (on standard error).
+    confirm : bool, default True
+        Re-run the point with the largest first output on the CVODES engine
+        at rtol 1e-10 and keep the comparison in ``result.worst_point``
+        (:func:`kilnctl.sweep.confirm.confirm_worst`): a sweep's worst case
+        must be a property of the plant, not of the integrator.
 
     Returns
     -------
@@ -339,5 +345,11 @@ def run_sweep(study, executor=None, *, workers: int | None = None, cache=None, p
         "cache": None if store is None else str(store.directory),
     }
     cached = [t["key"] in from_cache for t in tasks]
-    return SweepResult.from_records(study, [records[t["key"]] for t in tasks], cached, info)
+    result = SweepResult.from_records(study, [records[t["key"]] for t in tasks], cached, info)
+    if confirm:
+        from .confirm import confirm_worst
+
+        result.worst_point = confirm_worst(study, result)
+        result.info["wall_s"] = time.perf_counter() - t0
+    return result
 

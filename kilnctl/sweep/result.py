@@ -104,6 +104,10 @@ class SweepResult:
     info : dict
         ``n_points``, ``n_computed``, ``n_cached``, ``n_failed``, ``wall_s``
         [s], ``executor``, ``cache``.
+    worst_point : WorstPoint or None
+        The point with the largest first output re-run on the CVODES engine
+        at rtol 1e-10 (:mod:`kilnctl.sweep.confirm`), with a setup that
+        reproduces it; None when not confirmed.
     """
 
     def __init__(self, study, table, info: dict):
@@ -112,6 +116,7 @@ class SweepResult:
         self.variables = tuple(study.variables)
         self.outputs = tuple(study.outputs)
         self.info = dict(info)
+        self.worst_point = None
 
     @classmethod
     def from_records(cls, study, records, cached, info) -> "SweepResult":
@@ -248,6 +253,11 @@ class SweepResult:
             out[k] = {"min": float(col.min()), "mean": float(col.mean()), "max": float(col.max()),
                       "argmax": {v: _plain(ok.at[i, v]) for v in self.variables}}
         out["info"] = self.info
+        w = self.worst_point
+        if w is not None:
+            out["worst_point"] = {"output": w.output, "point": w.index, "variables": w.variables, "value": w.value,
+                                  "cvodes_rtol_1e-10": w.reference, "confirmed": w.agree, "error": w.error,
+                                  "setup_toml": w.setup_toml, "command": w.command}
         return out
 
     # --- files -----------------------------------------------------------------------------------
