@@ -7,17 +7,17 @@ second integrator, BDF instead of Rosenbrock, with its own event location) as
 the reference.  Two checks per point:
 
 - **implementation** (ros3p at 1e-10 against the reference): the same mode
-  switches (count, kinds, times within 1e-5 s) and the same peak and final
+  switches (count, kinds, the k-th time within 1e-6*(k+1) s) and the same peak and final
   current and peak stress within 1e-5 (relative): at equal accuracy the two
   engines must give the same answer, so a missed or misplaced event shows here
   whatever the tolerance;
 - **default accuracy** (ros3p at its defaults against the reference): what a
   user reads off a default run is within the documented accuracy
   (:data:`DEFAULT_TOLERANCE`): same mode switches (count and kinds), peaks
-  within 2e-4, and event times within 5 ms -- in stick-slip cycling the event
-  times of a default run drift by about 1e-4 s per cycle, and a current read at
-  a fixed instant inherits that drift, hence the looser bound on the final
-  current.
+  within 2e-4, and the k-th event time within 2e-4*(k+1) s -- in stick-slip
+  cycling the event times of a default run drift by up to about 1e-4 s per
+  cycle, and a current read at a fixed instant inherits that drift, hence the
+  looser bound on the final current.
 
 Points are random (seeded) and adversarial: backlash 0-20 mm, burden mass and
 inertia 0.3-3x Table 1, friction across both laws, every effect of the
@@ -44,10 +44,16 @@ import numpy as np
 
 #: agreement required, as documented in docs/benchmarks.md and simulate(): per quantity
 #: |a - b| <= rel * max(|a|, |b|) + abs (abs in A and Pa), and event times within ``event_dt`` seconds
+#: per event: the k-th switch (k from 0) may differ by event_dt * (k + 1) seconds (the error of each event
+#: time carries into the next); and switches that both engines place within the first START_WINDOW
+#: seconds of a start from rest match whatever their times: there every guard starts on its boundary
+#: with zero rate, and its crossing is resolved only to the guard's dead band (|g| < 1e-7, e.g. 1e-11 m of
+#: mesh deflection), which the two engines bracket from different points
 TIGHT_TOLERANCE = {"peak_current": (1e-5, 1e-3), "final_current": (1e-5, 1e-3), "peak_stress": (1e-5, 100.0),
-                   "event_dt": 1e-5}
+                   "event_dt": 1e-6}
 DEFAULT_TOLERANCE = {"peak_current": (2e-4, 0.05), "final_current": (5e-3, 0.5), "peak_stress": (2e-4, 5e3),
-                     "event_dt": 5e-3}
+                     "event_dt": 2e-4}
+START_WINDOW = 1e-3
 
 #: the structures the search draws from: (model, effects added, friction law)
 STRUCTURES = [
@@ -233,7 +239,7 @@ def _disagreements(label, a, b, tol) -> list[str]:
         if (ka, ca_) != (kb, cb):
             out.append(f"{label}: event {k} is {ca_}.{ka} at {ta:.6f} s vs {cb}.{kb} at {tb:.6f} s")
             break
-        if abs(ta - tb) > tol["event_dt"]:
+        if abs(ta - tb) > tol["event_dt"] * (k + 1) and max(ta, tb) > START_WINDOW:
             out.append(f"{label}: event {k} ({ca_}.{ka}) at {ta:.7f} s vs {tb:.7f} s")
             break
     return out
@@ -259,18 +265,21 @@ def search(points, jobs: int = 1, progress: bool = True) -> list[Verdict]:
     list of Verdict
     """
     out = []
+
+    def note(k, v):
+        out.append(v)
+        if progress and v.problems:
+            print(f"  point {v.point.index}: " + "; ".join(v.problems) + f"\n    {v.point.reproduce()}", flush=True)
+        if progress and k % 50 == 0:
+            print(f"  {k}/{len(points)} points, {sum(bool(x.problems) for x in out)} disagreements", flush=True)
+
     if jobs <= 1:
-        it = map(_run_one, points)
-        for k, v in enumerate(it, 1):
-            out.append(v)
-            if progress and k % 50 == 0:
-                print(f"  {k}/{len(points)} points, {sum(bool(x.problems) for x in out)} disagreements", flush=True)
+        for k, v in enumerate(map(_run_one, points), 1):
+            note(k, v)
         return out
     with ProcessPoolExecutor(jobs) as ex:
         for k, v in enumerate(ex.map(_run_one, points, chunksize=4), 1):
-            out.append(v)
-            if progress and k % 50 == 0:
-                print(f"  {k}/{len(points)} points, {sum(bool(x.problems) for x in out)} disagreements", flush=True)
+            note(k, v)
     return out
 
 

@@ -35,6 +35,9 @@ from .response import Event, Response
 
 __all__ = ["simulate", "resolve_gains", "DEFAULT_DT"]
 
+#: a guard on its boundary counts as crossed at once when its rate takes it past -GUARD_EPS within
+#: this time [s]; slower (grazing) guards are left to the integrator's crossing detection
+GUARD_LOOKAHEAD = 1e-3
 #: a scaled state beyond this is a runaway (the loop is unstable), reported as an error
 RUNAWAY = 1e6
 #: samples the compiled stepper returns per call; when full, the run continues from the last accepted
@@ -145,12 +148,21 @@ class _Engine:
         return np.asarray(g).ravel(), np.asarray(sel).ravel(), np.asarray(gdot).ravel()
 
     def violated(self, mf, xs, t, tol=1e-10):
-        """Index of the first guard the mode is already outside of at (xs, t), or None."""
+        """Index of the first guard the mode is already outside of at (xs, t), or None.
+
+        A guard is violated when it is below -GUARD_EPS, or when it is on its
+        boundary (within ``tol``) and falling fast enough to pass -GUARD_EPS
+        within :data:`GUARD_LOOKAHEAD` seconds.  A guard that sits on its
+        boundary with a rate at round-off level (a grazing switch, where the
+        rate's sign is noise) is left to the integrator, which switches when
+        the guard really crosses; judging such a sign at the instant made
+        the current limit alternate with free running without time passing.
+        """
         if not mf.guards:
             return None
         g, _, gdot = self.guards(mf, xs, t)
         for j in range(len(g)):
-            if g[j] < -GUARD_EPS or (g[j] <= tol and gdot[j] < -tol):
+            if g[j] < -GUARD_EPS or (g[j] <= tol and gdot[j] * GUARD_LOOKAHEAD < -GUARD_EPS):
                 return j
         return None
 
@@ -199,7 +211,8 @@ class _Engine:
             visited.append(new)
             mode = new
             mf = plant.functions(mode)
-            xs = mf.stepper.project(self.P, xs) if mf.stepper is not None else np.asarray(mf.project(xs, self.P)).ravel()
+            xs = (mf.stepper.project(self.P, xs, t) if mf.stepper is not None
+                  else np.asarray(mf.project(xs, t, self.P)).ravel())
             j = self.violated(mf, xs, t)
         raise EventStormError(f"more than 32 mode switches at t = {t:.6g} s without time passing "
                               f"(last: {switched[-1][1]} -> {switched[-1][2]})")

@@ -59,6 +59,72 @@ class Eqs:
         self.outputs: dict[str, ca.SX] = {}
         self.accel: dict[str, ca.SX] = {}
         self.projection: dict[str, ca.SX] = {}
+        self.controls: list[tuple] = []
+
+    # --- Filippov sliding modes with an equivalent control -----------------
+    def equivalent_control(self, name: str):
+        """A symbol u that the plant will choose so that an invariant stays constant.
+
+        A sliding mode of a component uses ``u`` (a fraction in [0, 1]) where
+        its two neighbouring modes differ (for the current limit: how much of
+        the time the integrator runs), and declares with
+        :meth:`hold_constant` which expression the sliding motion keeps
+        constant.  After the equations are complete the plant solves
+        d(invariant)/dt = 0 for u (it enters affinely: Filippov's convex
+        combination) and substitutes the solution everywhere.
+        """
+        u = ca.SX.sym(f"u_{name}")
+        self.controls.append([u, None, None, None])
+        return u
+
+    def hold_constant(self, u, invariant, below: str, above: str, component: str) -> None:
+        """Declare the invariant of the sliding mode that uses ``u``, and where it ends.
+
+        Parameters
+        ----------
+        u : casadi.SX
+            The symbol from :meth:`equivalent_control`.
+        invariant : casadi.SX
+            Expression (of states and time) the sliding motion keeps constant.
+        below, above : str
+            Modes of ``component`` entered when the required u leaves [0, 1]
+            through 0 (``below``) or through 1 (``above``).
+        component : str
+            The component that owns the sliding mode.
+        """
+        for c in self.controls:
+            if c[0] is u:
+                c[1:] = [invariant, (below, above), component]
+                return
+        raise ModelError("hold_constant: u was not made by equivalent_control")
+
+    def solve_controls(self, xs, scales, state_names) -> None:
+        """Replace each equivalent control by the value that keeps its invariant constant.
+
+        Adds the guards u* > 0 and u* < 1 (the sliding motion exists while
+        the required fraction is inside [0, 1]).
+        """
+        for u, inv, (below, above), comp in self.controls:
+            if inv is None:
+                raise ModelError(f"sliding mode of {comp!r}: equivalent control without an invariant")
+            rate = ca.vertcat(*[self.rates[n] / scales[i] for i, n in enumerate(state_names)])
+            cdot = ca.jtimes(inv, xs, rate) + ca.jacobian(inv, self.t)
+            c0, c1 = ca.substitute(cdot, u, 0), ca.substitute(cdot, u, 1)
+            den = c1 - c0
+            ustar = ca.if_else(ca.fabs(den) > 1e-12 * (ca.fabs(c0) + ca.fabs(c1)) + 1e-300, -c0 / den, 0)
+            self._substitute(u, ustar)
+            self.guards.append(Guard("sliding_end", comp, ustar, below))
+            self.guards.append(Guard("sliding_end", comp, 1 - ustar, above))
+        self.controls = []
+
+    def _substitute(self, u, value) -> None:
+        for d in (self.rates, self.outputs, self.sig, self.projection):
+            for k, v in list(d.items()):
+                if isinstance(v, ca.SX):
+                    d[k] = ca.substitute(v, u, value)
+        self.guards = [Guard(g.kind, g.component, ca.substitute(g.expr, u, value), g.target, g.alt_target,
+                             None if g.selector is None else ca.substitute(g.selector, u, value))
+                       for g in self.guards]
 
     # --- phase 2 ---------------------------------------------------------
     def add_inertia(self, node: str, J) -> None:
@@ -148,8 +214,9 @@ class ModeFunctions:
     output : casadi.Function
         (xs, t, P) -> output vector at one point.
     project : casadi.Function
-        (xs, P) -> xs with node speeds made consistent with this mode's rigid
-        links, conserving each rigid group's angular momentum.
+        (xs, t, P) -> xs made consistent with this mode's constraints: node
+        speeds onto its rigid links (conserving each rigid group's angular
+        momentum), a held current onto its limit.
     guard : casadi.Function
         (xs, t, P) -> (g, selector, dg/dt), one entry per guard.
     guard_map : casadi.Function
@@ -298,6 +365,8 @@ class Plant:
         missing = [n for n in self.state_names if n not in e.rates]
         if missing:
             raise ModelError(f"no component sets the rate of states {missing}")
+        if e.controls:
+            e.solve_controls(xs, self.scales, self.state_names)
         return e, xs, t, sp
 
     @property
@@ -339,7 +408,7 @@ class Plant:
         out = ca.Function("out", [xs, t, P], [y])
         proj = ca.vertcat(*[e.projection.get(nm, e.x[nm]) / self.scales[i]
                             for i, nm in enumerate(self.state_names)])
-        project = ca.Function("project", [xs, P], [proj])
+        project = ca.Function("project", [xs, t, P], [proj])
         n = self.n_grid
         stepper = build_stepper(f, xs, t, P, g, y, sel, gdot, proj) if self.compile else None
         if stepper is not None:

@@ -176,20 +176,40 @@ class CurrentLimit(Component):
     When the current reaches +-I_max the drive holds it there (the armature
     voltage drops to what holds it) and freezes the integrator; it lets go
     when the unlimited current would fall back inside the limit.
+
+    Modes ``free``, ``upper``, ``lower`` and the Filippov sliding modes
+    ``slide_upper``, ``slide_lower``: when freezing the integrator makes the
+    unlimited current fall back at once while integrating makes it rise
+    again (a fast ramp against a heavy load), the two modes would switch
+    into one another without time passing.  The sliding mode holds the
+    current at the limit and runs the integrator at the fraction u in [0, 1]
+    of the time that keeps the unlimited current's rate at zero (the convex
+    combination of the two modes, solved by the plant:
+    :meth:`~kilnctl.model.assembly.Eqs.equivalent_control`).  It ends in
+    ``upper`` when even a frozen integrator lets the current rise (u < 0)
+    and in ``free`` when even a running one lets it fall (u > 1).  A held
+    current is released into the sliding mode, which passes on to ``free``
+    at the same instant unless the integrator would bring the current
+    straight back: both engines then take the same path.
     """
 
     name = "current_limit"
     summary = "armature current held at +-I_max, integrator frozen while held"
     param_names = ("I_max",)
     requires = ("dc_motor", "pid")
-    modes = ("free", "upper", "lower")
+    modes = ("free", "upper", "lower", "slide_upper", "slide_lower")
 
     def signals(self, e, mode):
         p = e.p
-        if mode in ("upper", "lower"):
-            e.sig["i_a"] = p.I_max if mode == "upper" else -p.I_max
-            e.sig["integrate"] = ca.SX(0)
+        if mode != "free":
+            e.sig["i_a"] = p.I_max if mode in ("upper", "slide_upper") else -p.I_max
             e.sig["current_limited"] = 1
+            if mode.startswith("slide"):
+                # the voltage limit's freeze (integrate = 0) still wins
+                self._u = e.equivalent_control(self.name)
+                e.sig["integrate"] = e.sig.get("integrate", ca.SX(1)) * self._u
+            else:
+                e.sig["integrate"] = ca.SX(0)
 
     def finish(self, e, mode):
         p = e.p
@@ -200,8 +220,27 @@ class CurrentLimit(Component):
         # rate the current would have without the limit, in volts across L_a
         v_free = (e.sig["e_a"] + p.k_D * e.sig["ef_dot"] - p.R_a * e.sig["i_a"]
                   - p.k_b * e.x["omega_motor"])
-        sign = 1.0 if mode == "upper" else -1.0
-        e.add_guard(Guard("current_limit_release", self.name, sign * v_free / p.V_max, "free"))
+        sign = 1.0 if mode in ("upper", "slide_upper") else -1.0
+        # on entering a held mode the current is put exactly at the limit (x_a = +-I_max - (k_D/L_a) e_f), so
+        # integration drift while held cannot leave the released current beyond the limit
+        e.projection["x_a"] = sign * p.I_max - p.k_D / p.L_a * e.sig["e_f"]
+        if mode.startswith("slide"):
+            held = "upper" if sign > 0 else "lower"
+            e.hold_constant(self._u, sign * v_free / p.V_max, below=held, above="free", component=self.name)
+            return
+        # released into the sliding mode, which hands over to free running at once unless running the
+        # integrator would push the current straight back to the limit (then it slides along it)
+        e.add_guard(Guard("current_limit_release", self.name, sign * v_free / p.V_max,
+                          "slide_upper" if sign > 0 else "slide_lower"))
+
+    def sliding_mode(self, cycle):
+        """Sliding at the limit when the limit and free running would alternate without time passing."""
+        if "free" in cycle:
+            if "upper" in cycle or "slide_upper" in cycle:
+                return "slide_upper"
+            if "lower" in cycle or "slide_lower" in cycle:
+                return "slide_lower"
+        return None
 
 
 @register

@@ -10,7 +10,7 @@
  *   kg (xs, t, P) -> g      guards (mode valid while g > 0)
  *   ko (xs, t, P) -> y      output signals
  *   kd (xs, t, P) -> (g, selector, dg/dt)   guards at an event, for the mode cascade
- *   kp (xs, P) -> xs        speeds projected onto the mode's rigid links
+ *   kp (xs, t, P) -> xs     state projected onto the mode's constraints (rigid links, held current)
  *
  * ROS3P: J. Lang and J. Verwer, BIT 41 (2001) 731-738, order 3, A-stable,
  * embedded order 2.  Coefficients in the transformed form of Hairer & Wanner.
@@ -328,11 +328,12 @@ int kiln_guard(const double* P, const double* x, double t, double* g, double* se
     return st;
 }
 
-/* Node speeds projected onto the mode's rigid links (momentum kept). */
-int kiln_project(const double* P, const double* x, double* out) {
+/* State projected onto the mode's constraints: node speeds onto the rigid links (momentum kept), a held
+   current onto its limit. */
+int kiln_project(const double* P, const double* x, double t, double* out) {
     ctx_t* c = (ctx_t*)malloc(sizeof(ctx_t));
     if (c == NULL) return -8;
-    c->arg[0] = x; c->arg[1] = P;
+    c->arg[0] = x; c->arg[1] = &t; c->arg[2] = P;
     c->res[0] = out;
     int st = kp(c->arg, c->res, c->iw, c->w, 0);
     free(c);

@@ -44,7 +44,7 @@ _SIGNATURES = {
     "kiln_check": [],
     "kiln_outputs": [_i, _i, _D, _i, _D, _D, _D],
     "kiln_guard": [_D, _D, _d, _D, _D, _D],
-    "kiln_project": [_D, _D, _D],
+    "kiln_project": [_D, _D, _d, _D],
 }
 
 
@@ -102,11 +102,11 @@ class Stepper:
             raise SimulationError("compiled guard evaluation failed")
         return g[: self.ng], sel[: self.ng], gd[: self.ng]
 
-    def project(self, P, x):
-        """Scaled state with node speeds projected onto the mode's rigid links."""
+    def project(self, P, x, t):
+        """Scaled state at time t projected onto the mode's constraints (rigid links, held current)."""
         P, x = self._params(P), _vector("x", x, self.n)
         out = np.empty(self.n)
-        if self.lib.kiln_project(P.ctypes.data_as(_D), x.ctypes.data_as(_D), out.ctypes.data_as(_D)):
+        if self.lib.kiln_project(P.ctypes.data_as(_D), x.ctypes.data_as(_D), float(t), out.ctypes.data_as(_D)):
             raise SimulationError("compiled projection failed")
         return out
 
@@ -188,7 +188,7 @@ def build_stepper(f, xs, t, P, g, y, sel, gdot, proj) -> Stepper | None:
     sel, gdot : casadi.SX
         Guard selectors and time derivatives of the guards.
     proj : casadi.SX
-        Scaled state with speeds projected onto the rigid links (a function of xs and P).
+        Scaled state projected onto the mode's constraints (a function of xs, t and P).
 
     Returns
     -------
@@ -211,7 +211,7 @@ def build_stepper(f, xs, t, P, g, y, sel, gdot, proj) -> Stepper | None:
              ca.Function("ko", [xs, t, P], [ca.densify(y)]),
              ca.Function("kd", [xs, t, P], [ca.densify(gg), ca.densify(sel if ng else ca.SX.ones(1)),
                                             ca.densify(gdot if ng else ca.SX.zeros(1))]),
-             ca.Function("kp", [xs, P], [ca.densify(proj)])]
+             ca.Function("kp", [xs, t, P], [ca.densify(proj)])]
     driver = resources.files("kilnctl.model").joinpath("rosenbrock.c").read_bytes()
     lib_path = compile_sources("mode", {"gen.c": generate_c(funcs, "gen"), "rosenbrock.c": driver})
     if lib_path is None:
