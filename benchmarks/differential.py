@@ -7,7 +7,9 @@ second integrator, BDF instead of Rosenbrock, with its own event location) as
 the reference.  Two checks per point:
 
 - **implementation** (ros3p at 1e-10 against the reference): the same mode
-  switches (count, kinds, the k-th time within 1e-6*(k+1) s) and the same peak and final
+  switches (count, kinds, the k-th time within 1e-5*(k+1) s: a slow crossing,
+  such as teeth separating at a few mm/s, turns a state error of 1e-11 m into
+  microseconds) and the same peak and final
   current and peak stress within 1e-5 (relative): at equal accuracy the two
   engines must give the same answer, so a missed or misplaced event shows here
   whatever the tolerance;
@@ -50,7 +52,7 @@ import numpy as np
 #: with zero rate, and its crossing is resolved only to the guard's dead band (|g| < 1e-7, e.g. 1e-11 m of
 #: mesh deflection), which the two engines bracket from different points
 TIGHT_TOLERANCE = {"peak_current": (1e-5, 1e-3), "final_current": (1e-5, 1e-3), "peak_stress": (1e-5, 100.0),
-                   "event_dt": 1e-6}
+                   "event_dt": 1e-5}
 DEFAULT_TOLERANCE = {"peak_current": (2e-4, 0.05), "final_current": (5e-3, 0.5), "peak_stress": (2e-4, 5e3),
                      "event_dt": 2e-4}
 START_WINDOW = 1e-3
@@ -328,8 +330,9 @@ def main(argv=None):
     print(f"wall {wall:.0f} s on {a.jobs} workers")
     payload = {"seed": a.seed, "points": a.points, "t_end": a.t_end, "wall_s": wall,
                "tight_tolerance": TIGHT_TOLERANCE, "default_tolerance": DEFAULT_TOLERANCE, "summary": text,
-               "disagreements": [{"point": asdict(v.point), "problems": v.problems, "ros3p": v.ros3p,
-                                  "ros3p_tight": v.ros3p_tight, "cvodes": v.cvodes} for v in verdicts if v.problems]}
+               "disagreements": [{"point": asdict(v.point), "problems": v.problems} for v in verdicts if v.problems],
+               "runs": [{"point": asdict(v.point), "error": v.error, "ros3p": v.ros3p, "ros3p_tight": v.ros3p_tight,
+                         "cvodes": v.cvodes} for v in verdicts]}
     Path(a.out).write_text(json.dumps(payload, indent=1, default=str))
     return 0 if not any(v.problems for v in verdicts) else 1
 
