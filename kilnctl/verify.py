@@ -18,11 +18,11 @@ import numpy as np
 from .errors import SimulationError
 from .params import Parameters
 from .response import Response
+from .units import RPM_PER_RAD_S
 from .simulate import resolve_gains, simulate
 
 __all__ = ["Verification", "verify", "ramp_figures"]
 
-RPM_PER_RAD_S = 60.0 / (2.0 * np.pi)
 #: the quantities of :meth:`Verification.table` as printed
 QUANTITY_LABELS = {"overshoot_pct": "overshoot after the ramp [%]", "settle_time_s": "settled within 2 % from [s]",
                    "ramp_lag_rpm": "lag at the end of the ramp [rpm]", "peak_current_A": "peak current [A]",

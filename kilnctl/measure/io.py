@@ -32,6 +32,7 @@ import numpy as np
 
 from ..errors import ConfigFileError, DataError, ParameterError, close_matches_hint
 from ..params import GROUPS, SPECS, Parameters
+from ..units import RPM_PER_RAD_S
 
 __all__ = ["Measurement", "Setup", "Experiment", "read_csv", "read_record", "load_setup", "REQUIRED", "OPTIONAL",
            "MIN_DURATION_S", "MIN_SAMPLES", "GAP_FACTOR", "MAX_RECORD_S", "record_columns"]
@@ -47,7 +48,6 @@ MIN_SAMPLES = 50
 #: a time step larger than GAP_FACTOR x the median step is a gap
 GAP_FACTOR = 5.0
 
-_RPM_PER_RAD_S = 60.0 / (2.0 * math.pi)
 
 
 @dataclass(frozen=True)
@@ -739,7 +739,7 @@ def _check_units(arrays, lines, source, params, row_word, labels=None):
         a = arrays[name]
         top = float(np.max(np.abs(a)))
         k = int(np.argmax(np.abs(a)))
-        rad = w_ref / _RPM_PER_RAD_S
+        rad = w_ref / RPM_PER_RAD_S
         if 0.3 * rad < top < 0.12 * w_ref and top < 2.0 * rad:
             raise DataError(
                 f"{at}: largest value {top:.4g} looks like rad/s, not rpm (the setup's speed reference {w_ref:g} rpm "

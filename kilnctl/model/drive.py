@@ -26,9 +26,9 @@ from __future__ import annotations
 
 import casadi as ca
 
+from ..units import RPM_PER_RAD_S
 from .base import Component, Guard, register
 
-RPM_PER_RAD_S = 60.0 / (2.0 * 3.141592653589793)
 
 
 @register

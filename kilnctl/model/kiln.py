@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import casadi as ca
 
+from ..units import RPM_PER_RAD_S
 from .base import Component, Guard, register
 
 #: speed that regularises the bearing friction at standstill [rad/s] (numerical, not physical)
@@ -37,7 +38,7 @@ class Kiln(Component):
         e.add_inertia("kiln", e.p.J_kiln)
 
     def finish(self, e, mode):
-        e.add_output("kiln_rpm", e.x["omega_kiln"] * 60.0 / (2.0 * 3.141592653589793))
+        e.add_output("kiln_rpm", e.x["omega_kiln"] * RPM_PER_RAD_S)
 
 
 @register
