@@ -294,15 +294,20 @@ class _Engine:
             if st == 2:
                 t, xs = te, xe
                 continue
-            self.record(mf, np.array([te]), xe[:, None])
-            new_mode, xe, switched = self.settle(mode, xe, te, first=r["j_ev"])
-            self.log(switched, te)
-            if len(self.events) > self.max_events:
-                self._storm(te)
-            mode, xs, t = new_mode, xe, te
+            mode, xs, t = self.switch(mode, mf, te, xe, r["j_ev"])
             h = 0.0
-            self.record(plant.functions(mode), np.array([t]), xs[:, None])
         return mode
+
+    def switch(self, mode, mf, te, xe, j):
+        """Guard j of ``mode`` fired at (te, xe): record the point on both sides of the switch, settle
+        the cascade, log it; return the new mode, its (projected) state and te.  Shared by both engines."""
+        self.record(mf, np.array([te]), xe[:, None])
+        new_mode, xe, switched = self.settle(mode, xe, te, first=j)
+        self.log(switched, te)
+        if len(self.events) > self.max_events:
+            self._storm(te)
+        self.record(self.plant.functions(new_mode), np.array([te]), xe[:, None])
+        return new_mode, xe, te
 
     def check_bounded(self, X, x_end, t, mode):
         """Raise if a (scaled) state ran away: beyond RUNAWAY times its nominal scale."""
@@ -378,13 +383,7 @@ class _Engine:
                     best = (te, xe, int(j))
             te, xe, j = best
             self.record(mf, tg[:k], X[:, :k])
-            self.record(mf, np.array([te]), xe[:, None])
-            new_mode, xe, switched = self.settle(mode, xe, te, first=j)
-            self.log(switched, te)
-            if len(self.events) > self.max_events:
-                self._storm(te)
-            mode, xs, t = new_mode, xe, te
-            self.record(plant.functions(mode), np.array([t]), xs[:, None])
+            mode, xs, t = self.switch(mode, mf, te, xe, j)
         return mode
 
 
