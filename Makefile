@@ -4,7 +4,7 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test test-all bench docs studies clean chromium
+.PHONY: demo test test-fast bench docs studies clean chromium
 
 $(STAMP): pyproject.toml
 	@command -v $(PYTHON) >/dev/null 2>&1 || { echo "need $(PYTHON) on PATH (or run: make PYTHON=python3 ...)"; exit 1; }
@@ -16,12 +16,12 @@ $(STAMP): pyproject.toml
 demo: $(STAMP)
 	MPLBACKEND=Agg $(PY) -m kilnctl.demo --out out
 
-# every module's tests except those marked slow (each > ~10 s); test-all runs those too
+# the whole suite (what CI runs); test-fast skips the tests marked slow (each > ~10 s) while iterating
 test: $(STAMP) chromium
 	MPLBACKEND=Agg $(PY) -m pytest
 
-test-all: $(STAMP) chromium
-	MPLBACKEND=Agg $(PY) -m pytest -m "slow or not slow"
+test-fast: $(STAMP) chromium
+	MPLBACKEND=Agg $(PY) -m pytest -m "not slow"
 
 # headless Chromium for the test that loads each report page (tests/test_report_pages.py): installed when
 # missing and we are root with apt-get; otherwise that test is skipped with the reason (never a failure here)
