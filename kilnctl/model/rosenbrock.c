@@ -37,6 +37,11 @@ int kp_work(cint* sz_arg, cint* sz_res, cint* sz_iw, cint* sz_w);
 
 #define NMAX 64
 #define GMAX 64
+/* interface version of the kiln_* entry points: kilnctl.model.stepper checks it before any call */
+#define KILN_ABI 3
+cint kf_n_in(void); cint kj_n_in(void); cint kt_n_in(void); cint kg_n_in(void);
+cint ko_n_in(void); cint kd_n_in(void); cint kp_n_in(void);
+cint kd_n_out(void);
 /* A guard has crossed when it is below -guard_eps (an argument of kiln_run, defined once in Python:
    kilnctl.model.stepper.GUARD_EPS; guards are scaled to order one), so a guard that starts on its
    boundary does not fire on round-off or on integration error below the absolute tolerance. */
@@ -293,8 +298,14 @@ done:
     return status;
 }
 
-/* 0 when the generated functions fit the fixed work arrays of ctx_t. */
+/* Interface version of this driver (see KILN_ABI). */
+int kiln_abi(void) { return KILN_ABI; }
+
+/* 0 when the generated functions have the arguments this driver passes (x, t, P; kd with three
+   results) and fit the fixed work arrays of ctx_t. */
 int kiln_check(void) {
+    if (kf_n_in() != 3 || kj_n_in() != 3 || kt_n_in() != 3 || kg_n_in() != 3 || ko_n_in() != 3 ||
+        kd_n_in() != 3 || kp_n_in() != 3 || kd_n_out() != 3) return 2;
     int (*works[7])(cint*, cint*, cint*, cint*) = {kf_work, kj_work, kt_work, kg_work, ko_work, kd_work, kp_work};
     for (int k = 0; k < 7; k++) {
         cint a, r, iw, w;

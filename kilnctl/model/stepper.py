@@ -13,7 +13,7 @@ from __future__ import annotations
 import ctypes
 import warnings
 from dataclasses import dataclass
-from importlib import resources
+from pathlib import Path
 
 import casadi as ca
 import numpy as np
@@ -33,6 +33,8 @@ STATUS = {0: "reached t_end", 1: "event", 2: "output buffer full", -1: "singular
 #: starts on its boundary does not fire on round-off or on integration error below the default
 #: absolute tolerance; the one definition, used by both engines and passed to the C stepper
 GUARD_EPS = 1e-7
+#: interface version of rosenbrock.c's entry points (KILN_ABI there); a library that reports another is not used
+ABI = 3
 #: most states and most guards the C stepper handles (its fixed arrays, ``NMAX``/``GMAX`` in rosenbrock.c)
 NMAX = 64
 
@@ -42,6 +44,7 @@ _d, _i = ctypes.c_double, ctypes.c_int
 _SIGNATURES = {
     "kiln_run": [_i, _i, _D, _d, _d, _D, _d, _d, _d, _d, _d, _d, _i, _D, _D, _I, _D, _D, _I, _i, _I, _D, _d, _d],
     "kiln_check": [],
+    "kiln_abi": [],
     "kiln_outputs": [_i, _i, _D, _i, _D, _D, _D],
     "kiln_guard": [_D, _D, _d, _D, _D, _D],
     "kiln_project": [_D, _D, _d, _D],
@@ -212,7 +215,8 @@ def build_stepper(f, xs, t, P, g, y, sel, gdot, proj) -> Stepper | None:
              ca.Function("kd", [xs, t, P], [ca.densify(gg), ca.densify(sel if ng else ca.SX.ones(1)),
                                             ca.densify(gdot if ng else ca.SX.zeros(1))]),
              ca.Function("kp", [xs, t, P], [ca.densify(proj)])]
-    driver = resources.files("kilnctl.model").joinpath("rosenbrock.c").read_bytes()
+    # the driver next to this file, so the Python side and the C side always come from one tree
+    driver = Path(__file__).with_name("rosenbrock.c").read_bytes()
     lib_path = compile_sources("mode", {"gen.c": generate_c(funcs, "gen"), "rosenbrock.c": driver})
     if lib_path is None:
         return None
@@ -226,6 +230,11 @@ def build_stepper(f, xs, t, P, g, y, sel, gdot, proj) -> Stepper | None:
         warnings.warn(f"kilnctl: the cached stepper library {lib_path} does not load ({exc}); falling back to "
                       "CVODES. Delete that file (or set KILNCTL_CACHE to a fresh folder) to rebuild it.",
                       RuntimeWarning, stacklevel=3)
+        return None
+    if lib.kiln_abi() != ABI:
+        warnings.warn(f"kilnctl: the stepper library {lib_path} has interface version {lib.kiln_abi()}, this kilnctl "
+                      f"needs {ABI}; falling back to CVODES. Delete that file to rebuild it.", RuntimeWarning,
+                      stacklevel=3)
         return None
     if lib.kiln_check() != 0:
         warnings.warn("kilnctl: this mode's generated code needs more work memory than the compiled stepper has; "
