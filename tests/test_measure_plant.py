@@ -303,3 +303,24 @@ def test_split_writes_all_or_nothing_and_skips_what_is_not_a_record(tmp_path, ca
     assert main(["split-startups", str(p), "--by", "ref", "--out", str(tmp_path / "x"),
                  "--columns", "speed_ref_rpm=nope"]) == 2
     assert "no column 'nope'" in capsys.readouterr().err and not (tmp_path / "x").exists()
+
+
+@pytest.mark.parametrize("name, message", [
+    ("r.xlsx", r"r.xlsx: not a readable Excel workbook"),
+    ("r.parquet", r"r.parquet: not a readable Parquet file"),
+    ("r.mat", r"r.mat: not a readable MATLAB .mat file"),
+])
+def test_a_damaged_binary_file_is_a_clear_error(tmp_path, name, message):
+    p = tmp_path / name
+    p.write_text("time_s,current_A,speed_rpm\n0,1,2\n")  # a CSV under the wrong suffix
+    with pytest.raises(DataError, match=message):
+        read_record(p)
+
+
+def test_a_mat_file_without_vectors_says_what_layout_is_read(tmp_path):
+    import scipy.io
+
+    p = tmp_path / "r.mat"
+    scipy.io.savemat(p, {"name": "kiln 2", "gain": 2.0})
+    with pytest.raises(DataError, match=r"no numeric vector in the file; kilnctl reads one variable per channel"):
+        read_record(p)
