@@ -324,3 +324,17 @@ def test_a_mat_file_without_vectors_says_what_layout_is_read(tmp_path):
     scipy.io.savemat(p, {"name": "kiln 2", "gain": 2.0})
     with pytest.raises(DataError, match=r"no numeric vector in the file; kilnctl reads one variable per channel"):
         read_record(p)
+
+
+def test_a_log_at_standstill_reads_and_says_why_nothing_was_found(tmp_path, capsys):
+    # an hour of standstill with sensor noise around zero: a valid log (no kiln-speed or sign complaint), no start-up
+    rng = np.random.default_rng(3)
+    t = np.arange(0.0, 3600.0, 0.5)
+    p = tmp_path / "idle.csv"
+    p.write_text("time_s,current_A,speed_rpm\n" + "\n".join(
+        f"{a},{800 + b},{c}" for a, b, c in zip(t, rng.standard_normal(t.size), 0.05 * rng.standard_normal(t.size))))
+    found = split_startups(read_record(p, log=True))
+    assert len(found) == 0 and "to above 250 rpm" in found.why_none()
+    assert main(["split-startups", str(p), "--out", str(tmp_path / "o")]) == 2
+    assert "no start-up found, nothing written; a start-up rises from rest" in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()

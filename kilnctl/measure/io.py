@@ -664,7 +664,7 @@ def _checked(arrays, lines, source, params, notes, row_word, labels=None, log=Fa
                         f"(need at least {MIN_SAMPLES} samples and {MIN_DURATION_S:g} s){hint}")
     _check_time_scale(t, med, source, labels.get("time_s", "'time_s'"), params, math.inf if log else MAX_RECORD_S,
                       time_name, arrays.get("speed_rpm"))
-    _check_units(arrays, lines, source, params, row_word, labels)
+    _check_units(arrays, lines, source, params, row_word, labels, log)
     return Measurement(t=t, channels=arrays, source=source, lines=lines, notes=tuple(notes), row_word=row_word)
 
 
@@ -729,8 +729,9 @@ def _check_time_scale(t, dt, source, label, params, max_span, name="time_s", spe
     raise DataError(f"{source}: column {label}: {problem}; {fix}")
 
 
-def _check_units(arrays, lines, source, params, row_word, labels=None):
-    """Refuse channels whose scale suggests the wrong unit."""
+def _check_units(arrays, lines, source, params, row_word, labels=None, log=False):
+    """Refuse channels whose scale suggests the wrong unit (in a long log only the rad/s and kA checks: a log may
+    stand still for most of its length, and each start-up cut from it gets every check)."""
     w_ref = params.omega_ref
     for name in ("speed_rpm", "speed_ref_rpm"):
         if name not in arrays:
@@ -746,12 +747,12 @@ def _check_units(arrays, lines, source, params, row_word, labels=None):
                 f"is {rad:.4g} rad/s); multiply by 60/(2*pi) = 9.549, or write the unit in the header "
                 f"('{name} [rad/s]')")
         kiln = w_ref / params.n
-        if 0 < top < 0.3 * rad and top < 3.0 * kiln:
+        if not log and 0 < top < 0.3 * rad and top < 3.0 * kiln:
             raise DataError(
                 f"{at}: largest value {top:.4g} looks like the kiln speed, "
                 f"not the motor speed (the setup's {w_ref:g} rpm motor speed is {kiln:.3g} rpm at the kiln, "
                 f"reduction n = {params.n:g}); multiply by n, or map the motor speed if the file has it")
-        if name == "speed_rpm" and np.median(a[a.size // 2:]) < 0 < w_ref:
+        if not log and name == "speed_rpm" and np.median(a[a.size // 2:]) < 0 < w_ref:
             raise DataError(
                 f"{source}: column 'speed_rpm' is negative over the second half of the record (median "
                 f"{np.median(a[a.size // 2:]):.4g} rpm) while the setup's reference is +{w_ref:g} rpm; "

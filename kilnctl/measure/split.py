@@ -126,6 +126,23 @@ class Startups:
         """
         return list(self._records)
 
+    def why_none(self) -> str:
+        """Say why no start-up was found (empty when some were).
+
+        Returns
+        -------
+        str
+            The levels a start-up must cross and what the signal did.
+        """
+        if self.items:
+            return ""
+        sig = self.log.channels[self.by]
+        lo, hi = REST_FRACTION * self._params.omega_ref, RUN_FRACTION * self._params.omega_ref
+        what = (f"a start-up rises from rest (below {lo:.4g} rpm) to above {hi:.4g} rpm (2 % and 50 % of the "
+                f"setup's omega_ref = {self._params.omega_ref:g} rpm); {self.by} ranges from {sig.min():.4g} to "
+                f"{sig.max():.4g} rpm")
+        return what + ("; " + "; ".join(self.skipped) if self.skipped else "")
+
     def to_dict(self) -> dict:
         """Return the split as JSON-ready data."""
         return {"log": self.log.source, "by": self.by, "n_startups": len(self.items),
@@ -142,6 +159,8 @@ class Startups:
             lines.append(f"  {n:>3} {s.start:>11.3f} {s.ramp_start:>11.3f} {s.end - s.start:>10.2f} "
                          f"{s.peak_speed_rpm:>10.1f}  {s.rows[0]}-{s.rows[1]}")
         lines += [f"  skipped: {k}" for k in self.skipped]
+        if not self.items:
+            lines.append(f"  {self.why_none()}")
         return lines
 
     def write(self, out_dir, protect=()) -> list[Path]:
@@ -168,7 +187,7 @@ class Startups:
         """
         out_dir = Path(out_dir)
         if not self.items:
-            raise DataError(f"{self.log.source}: no start-up found, nothing written")
+            raise DataError(f"{self.log.source}: no start-up found, nothing written; {self.why_none()}")
         if out_dir.exists() and not out_dir.is_dir():
             raise DataError(f"--out {out_dir} is a file: give a folder")
         if out_dir.is_dir() and any(out_dir.iterdir()):
