@@ -103,6 +103,8 @@ OPTIONS = [
     ("optimize_pwl_zero", ["optimize-ramp", "--profile", "pwl:0"], ["pwl"]),
     ("optimize_pwl_huge", ["optimize-ramp", "--profile", "pwl:999"], ["pwl"]),
     ("optimize_t_max", ["optimize-ramp", "--t-max", "-3"], ["t_max"]),
+    ("optimize_max_rate_zero", ["optimize-ramp", "--max-rate", "0"], ["max_rate"]),
+    ("optimize_max_rate_huge", ["optimize-ramp", "--max-rate", "1e9"], ["max_rate"]),
     ("optimize_plot_format", ["optimize-ramp", "--plot", "{dir}/o.xyz"], ["--plot", "xyz"]),
     ("unknown_command", ["simluate"], ["simluate"]),
     ("compare_data_missing", ["compare", "--data", "{dir}/none.csv"], ["none.csv"]),

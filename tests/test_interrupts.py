@@ -127,3 +127,20 @@ def test_second_ctrl_c_ends_at_once(tmp_path):
     assert "Traceback" not in stderr
     _wait_for(lambda: not any(_alive(w) for w in workers), timeout=10)
     assert not (tmp_path / "r.csv").exists()
+
+
+@pytest.mark.slow  # about 10 s to reach IPOPT; tests/test_optimize_long.py checks the same path in-process
+def test_optimize_ramp_ctrl_c_inside_ipopt(tmp_path):
+    # the Ctrl-C lands inside IPOPT's evaluations (CVODES inside a CasADi callback): CasADi and CVODES
+    # report it their own way; the user sees kilnctl's one line and exit code 130
+    proc = _start(["optimize-ramp", "--profile", "pwl:2"], tmp_path)
+    lines = []
+    for line in proc.stderr:
+        lines.append(line)
+        if "stage 1" in line:
+            break
+    time.sleep(1.0)
+    proc.send_signal(signal.SIGINT)
+    _, rest = proc.communicate(timeout=30)
+    assert proc.returncode == 130, "".join(lines) + rest
+    assert rest.strip() == "kilnctl optimize-ramp: interrupted"

@@ -83,17 +83,6 @@ def print_json(obj) -> None:
     sys.stdout.write("\n")
 
 
-def _stop_now(signum, frame) -> None:  # pragma: no cover - runs in a process that ends here
-    """Second Ctrl-C: end at once, whatever clean-up the first one started (worker processes too)."""
-    import multiprocessing
-
-    for child in multiprocessing.active_children():
-        with contextlib.suppress(Exception):
-            child.kill()
-    os.write(2, b"kilnctl: interrupted again; stopped at once\n")
-    os._exit(EXIT_INTERRUPTED)
-
-
 def _handled_exception(ident: int):
     """The exception the thread ``ident`` is handling now (in an ``except`` or ``finally``), or None."""
     exc = sys._current_exceptions().get(ident)
@@ -118,11 +107,39 @@ class _Interrupts:
     def __init__(self):
         self.done = threading.Event()
         self.ident = threading.get_ident()
+        self.saved_stderr = None  # the real sys.stderr, while the libraries' messages are silenced
 
     def first(self, signum, frame):
-        signal.signal(signal.SIGINT, _stop_now)
-        threading.Thread(target=self._watch, name="kilnctl-interrupt", daemon=True).start()
-        raise KeyboardInterrupt
+        try:  # nothing here may fail: an exception other than KeyboardInterrupt would be dropped as well
+            signal.signal(signal.SIGINT, self.second)
+            self._silence_c_stderr()
+            threading.Thread(target=self._watch, name="kilnctl-interrupt", daemon=True).start()
+        finally:
+            raise KeyboardInterrupt
+
+    def second(self, signum, frame) -> None:  # pragma: no cover - runs in a process that ends here
+        """Second Ctrl-C: end at once, whatever clean-up the first one started (worker processes too)."""
+        import multiprocessing
+
+        for child in multiprocessing.active_children():
+            with contextlib.suppress(Exception):
+                child.kill()
+        os.write(2, b"kilnctl: interrupted again; stopped at once\n")
+        os._exit(EXIT_INTERRUPTED)
+
+    def _silence_c_stderr(self) -> None:
+        """Silence what the libraries print after Ctrl-C; kilnctl's own line goes to :attr:`stderr`.
+
+        After Ctrl-C the libraries print their own view of it (CVODES through CasADi: "the right-hand
+        side routine failed", "KeyboardInterruptException"; CasADi writes through Python's
+        sys.stderr); the user asked to stop and gets one line from kilnctl instead.  Writers that
+        hold the stream itself (a progress bar) still reach it.
+        """
+        try:
+            self.saved_stderr = sys.stderr
+            sys.stderr = open(os.devnull, "w")
+        except OSError:
+            self.saved_stderr = None
 
     def _watch(self):
         misses = 0
@@ -135,6 +152,20 @@ class _Interrupts:
                 ctypes.pythonapi.PyThreadState_SetAsyncExc(ctypes.c_ulong(self.ident),
                                                            ctypes.py_object(KeyboardInterrupt))
                 misses = 0
+
+    @property
+    def stderr(self):
+        """Where kilnctl's own messages go: the real standard error even while it is silenced."""
+        return sys.stderr if self.saved_stderr is None else self.saved_stderr
+
+    def restore_stderr(self) -> None:
+        """Undo :meth:`_silence_c_stderr` (for callers of :func:`main` that go on running)."""
+        if self.saved_stderr is None:
+            return
+        with contextlib.suppress(OSError, ValueError):
+            sys.stderr.close()
+        sys.stderr = self.saved_stderr
+        self.saved_stderr = None
 
 
 def _mark_interrupt_handled() -> None:
@@ -166,6 +197,7 @@ def _interrupts():
     finally:
         state.done.set()
         signal.signal(signal.SIGINT, previous)
+        state.restore_stderr()
 
 
 def main(argv=None) -> int:
@@ -197,7 +229,8 @@ def main(argv=None) -> int:
             if state is not None:
                 state.done.set()
             note = str(exc)
-            print(f"{command}: interrupted" + (f"; {note}" if note else ""), file=sys.stderr)
+            out = sys.stderr if state is None else state.stderr
+            print(f"{command}: interrupted" + (f"; {note}" if note else ""), file=out, flush=True)
             _mark_interrupt_handled()
             return EXIT_INTERRUPTED
         except BrokenPipeError:  # output piped into `head` and closed early

@@ -13,6 +13,7 @@ says why), 2 on an error (infeasible request, solver failure, bad input).
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 from ..errors import ConfigFileError
@@ -57,7 +58,11 @@ def register(sub) -> None:
     p.add_argument("--plot", metavar="FILE", help="write the comparison figure (format from the extension)")
     p.add_argument("--report", metavar="DIR", help="write optimize_ramp.html (one page, figure embedded), "
                    "optimize_ramp.json and optimize_ramp.png into DIR")
+    p.add_argument("--max-rate", type=float, default=None, metavar="RPM_S",
+                   help="largest rate of the reference [rpm/s] (every pwl segment, the constant rate, the "
+                        "S-curve's acceleration); default 2000. Forbids a ramp that creeps and then jumps")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
+    p.add_argument("--quiet", action="store_true", help="no progress lines on stderr (--json implies it)")
     p.set_defaults(func=run)
 
 
@@ -96,13 +101,21 @@ def run(args) -> int:
     _check_plot(args)
     params = load_params(args)
     problem = RampProblem(params, profile=args.profile, t_max=args.t_max, horizon=args.horizon,
-                          objective=args.objective, scenarios=default_scenarios() if args.robust else ())
+                          objective=args.objective, scenarios=default_scenarios() if args.robust else (),
+                          max_rate=args.max_rate)
+    progress = None
+    if not (args.quiet or args.json):
+        print(f"kilnctl optimize-ramp: {problem.profile.label} ramp, {len(problem.profile.names)} number(s) to "
+              "choose; Ctrl-C stops", file=sys.stderr, flush=True)
+
+        def progress(line):
+            print(line, file=sys.stderr, flush=True)
     price = None
     if args.robust:
-        price = price_of_robustness(problem, transcription=args.transcription)
+        price = price_of_robustness(problem, transcription=args.transcription, progress=progress)
         result = price.robust
     else:
-        result = optimize_ramp(problem, transcription=args.transcription)
+        result = optimize_ramp(problem, transcription=args.transcription, progress=progress)
     if args.plot:
         from matplotlib.figure import Figure
 

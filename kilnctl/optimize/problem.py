@@ -323,6 +323,11 @@ class RampProblem:
         Operating conditions for a robust ramp; empty: the nominal set only.
     include_nominal : bool, default True
         With scenarios, keep the nominal set as one more scenario.
+    max_rate : float, optional
+        Largest rate of the reference [rpm/s]: every segment of ``pwl:N``,
+        the ``constant`` rate, the S-curve's acceleration.  Default: the
+        profile's own bound (2000 rpm/s).  Use it to forbid a ramp that creeps
+        and then jumps (the optimum may do that: the result's notes say so).
 
     Raises
     ------
@@ -338,6 +343,7 @@ class RampProblem:
     objective: str = "peak"
     scenarios: tuple = ()
     include_nominal: bool = True
+    max_rate: float | None = None
 
     def __post_init__(self):
         if not isinstance(self.params, Parameters):
@@ -352,11 +358,32 @@ class RampProblem:
             raise ParameterError(f"speed_fraction = {f!r} must lie strictly between 0 and 1")
         if self.objective not in OBJECTIVES:
             raise ParameterError(f"objective {self.objective!r} is unknown: choose one of {sorted(OBJECTIVES)}")
+        if self.max_rate is not None:
+            self.max_rate = _positive("max_rate", self.max_rate)
+            if not RATE_BOUNDS[0] < self.max_rate <= RATE_BOUNDS[1]:
+                raise ParameterError(f"max_rate = {self.max_rate:g} rpm/s must lie in ({RATE_BOUNDS[0]:g}, "
+                                     f"{RATE_BOUNDS[1]:g}] rpm/s")
         self.scenarios = tuple(self.scenarios)
         for s in self.scenarios:
             if not isinstance(s, Scenario):
                 raise ParameterError(f"scenarios must be Scenario objects, not {type(s).__name__}")
             s.apply(self.params)  # validates the changes now, with the parameter's own message
+
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """Bounds of the decision variables (profile units): the profile's, with ``max_rate`` applied.
+
+        Returns
+        -------
+        lower, upper : ndarray
+        """
+        lo, hi = self.profile.bounds()
+        if self.max_rate is not None:
+            hi = hi.copy()
+            if self.profile.kind == "scurve":
+                hi[0] = min(hi[0], self.max_rate)
+            else:
+                hi = np.minimum(hi, self.max_rate)
+        return lo, hi
 
     @property
     def robust(self) -> bool:

@@ -16,6 +16,8 @@ values and Jacobian of all cases as a CasADi function for IPOPT.
 
 from __future__ import annotations
 
+import time
+
 import casadi as ca
 import numpy as np
 
@@ -105,8 +107,13 @@ class SensitivityRun:
         F = self._F.get(tighten)
         if F is None:
             rtol, atol = self._tol
+            # Warnings off: CVODES meets a NaN in the sensitivity equations at some trial steps (pwl:4: 4
+            # messages in one solve, pwl:8: 48) and recovers by shortening the step, while CasADi printed
+            # "sens:daeF failed: NaN detected" and SUNDIALS "repeated recoverable right-hand side function
+            # errors" each time. A run that does not recover still fails, is retried at tighter tolerances,
+            # then raises OptimizationError.
             opts = {"abstol": atol * tighten, "reltol": rtol * tighten, "max_num_steps": 1000000,
-                    "quad_err_con": True}
+                    "quad_err_con": True, "show_eval_warnings": False, "disable_internal_warnings": True}
             F = self._F[tighten] = ca.integrator("sens", "cvodes", self._dae, 0.0, list(self.grid), opts)
         return F
 
@@ -160,6 +167,10 @@ class SensitivityRun:
         return {"Y": Y, "dY": dY, "Q": qf[:nq, -1].copy(), "dQ": qf[nq:, -1].reshape(nq, self.nth)}
 
 
+#: seconds between progress lines during a solve
+PROGRESS_EVERY = 10.0
+
+
 class CaseCallback(ca.Callback):
     """Values and Jacobian of every case's objective and constraints, for IPOPT.
 
@@ -196,6 +207,12 @@ class CaseCallback(ca.Callback):
         self._val = self._jac = None
         self.n_runs = 0
         self._jac_cb = None
+        #: callable(str) or None: a line every PROGRESS_EVERY seconds while IPOPT evaluates
+        self.progress = None
+        self._last_report = time.perf_counter()
+        #: set when Ctrl-C arrived inside an evaluation: CasADi turns the KeyboardInterrupt raised there into
+        #: a failed evaluation, so the solver's caller checks this flag and raises it again
+        self.interrupted = False
         self.construct("cases", {"enable_fd": False})
 
     def set_stage(self, beta: float, c_s: float, c_d: float, widths: dict, inv_scale: float) -> None:
@@ -240,6 +257,15 @@ class CaseCallback(ca.Callback):
         values : ndarray, shape (n_out,)
         jacobian : ndarray, shape (n_out, n_z)
         """
+        if self.interrupted:  # stop the solver quickly: every evaluation fails from now on
+            raise KeyboardInterrupt
+        try:
+            return self._evaluate(z)
+        except KeyboardInterrupt:
+            self.interrupted = True
+            raise
+
+    def _evaluate(self, z):
         z = np.asarray(z, float).ravel()
         key = z.tobytes()
         if key == self._key:
@@ -265,6 +291,11 @@ class CaseCallback(ca.Callback):
                 jac.append(dks)
         J = np.array(jac) * self.theta_scale[None, :]
         self._key, self._val, self._jac = key, np.array(val), J
+        now = time.perf_counter()
+        if self.progress is not None and now - self._last_report >= PROGRESS_EVERY:
+            self._last_report = now
+            self.progress(f"    {self.n_runs} sensitivity runs so far; peak-stress objective {val[0]:.4g} "
+                          f"(stress scales), speed at t_max {val[2]:.3f} of omega_ref")
         return self._val, self._jac
 
     def eval(self, arg):

@@ -29,6 +29,8 @@ SCREEN_RTOL = 0.005
 PREDICT_DT = 1e-3
 #: IPOPT statuses taken as a solution
 ACCEPTED_STATUS = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
+#: segment rates differing by this factor or more get a note explaining the jump [-]
+JUMP_RATIO = 10.0
 #: a constraint is reported violated when it exceeds its bound by more than this (scaled units) [-]
 FEAS_TOL = 1e-4
 
@@ -112,25 +114,39 @@ def _violation(nlp, w, p):
 
 
 def _solve_stages(problem, model, cases, grid, sigma_scale, theta_scale, theta, stages, iters0, *, transcription,
-                  n_shooting, ipopt_options):
+                  n_shooting, ipopt_options, progress=None):
     """Run the continuation on one set of cases; return (theta, stage logs, iterations, status)."""
     nlp = build_nlp(problem, model, cases, grid, sigma_scale, theta_scale, theta, transcription, n_shooting,
                     ipopt_options, guess_widths=stages[0].widths)
+    if nlp.callback is not None:
+        nlp.callback.progress = progress
     w = nlp.w0.copy()
     logs, iters, status = [], 0, "Not_Solved"
     for k_st, st in enumerate(stages):
         t0 = time.perf_counter()
+        if progress is not None:
+            progress(f"  {problem.objective} stress, {len(cases)} case(s): stage {k_st + 1} of {len(stages)} "
+                     f"(smooth max sharpness {st.beta:g}) ...")
         theta_now = w[:nlp.n_theta] * nlp.theta_scale
         runs = [model.run(cp, theta_now, st.widths, grid.t) for _, cp in cases]
         c_s, c_d = (max(float(np.max(np.abs(r[k]))) for r in runs) / sigma_scale for k in ("sigma", "sigma_dyn"))
         p = nlp.parameters(st.beta, c_s, c_d, st.widths)
         if k_st == 0 and len(cases) > 1:  # the epigraph variable starts just above every case
             w[nlp.n_theta] = (c_s + TIE_BREAK * c_d if problem.objective == "peak" else c_d) + 0.05
-        sol = nlp.solver(x0=w, lbx=nlp.lbw, ubx=nlp.ubw, lbg=nlp.lbg, ubg=nlp.ubg, p=p)
+        try:
+            sol = nlp.solver(x0=w, lbx=nlp.lbw, ubx=nlp.ubw, lbg=nlp.lbg, ubg=nlp.ubg, p=p)
+        except RuntimeError as exc:  # CasADi reports a Ctrl-C inside IPOPT as a RuntimeError naming it
+            if getattr(nlp.callback, "interrupted", False) or "KeyboardInterrupt" in str(exc):
+                raise KeyboardInterrupt from None
+            raise
+        if getattr(nlp.callback, "interrupted", False):
+            raise KeyboardInterrupt  # Ctrl-C inside an evaluation, which CasADi reported as a failed one
         stats = nlp.solver.stats()
         status = stats.get("return_status", "unknown")
         n_it = int(stats.get("iter_count", 0))
         iters += n_it
+        if progress is not None:
+            progress(f"  ... {status} after {n_it} iterations, {time.perf_counter() - t0:.1f} s")
         w_new = np.asarray(sol["x"]).ravel()
         if status not in ACCEPTED_STATUS:
             cname, viol = _violation(nlp, w_new, p)
@@ -184,7 +200,7 @@ def _screen(problem, model, cases, active, theta, widths, grid) -> list[int]:
 
 def _infeasibility_precheck(problem: RampProblem, cases):
     """Raise at once for requests no ramp can meet (the reference itself must be at speed in time)."""
-    hi = problem.profile.bounds()[1]
+    hi = problem.bounds()[1]
     t_fast = problem.profile.end_time(hi, problem.params.omega_ref) * problem.speed_fraction
     if t_fast >= problem.t_max:
         raise RampSolveError(
@@ -196,7 +212,7 @@ def _infeasibility_precheck(problem: RampProblem, cases):
 def optimize_ramp(problem: RampProblem, *, transcription: str = "single_shooting", stages=DEFAULT_STAGES,
                   dt: float = 1e-2, n_shooting: int = 10, verify: bool = True, tolerance: float = VERIFY_RTOL,
                   initial=None, ipopt_options: dict | None = None, rtol: float = 1e-8,
-                  atol: float = 1e-8, screen: bool = True) -> RampResult:
+                  atol: float = 1e-8, screen: bool = True, progress=None) -> RampResult:
     """Find the start-up ramp of least peak gear stress, and verify it on the hybrid plant.
 
     Parameters
@@ -235,6 +251,9 @@ def optimize_ramp(problem: RampProblem, *, transcription: str = "single_shooting
         or a constraint, and re-solve (scenario generation; the optimum is
         that of all cases, at a fraction of the cost).  False: all cases at
         once.
+    progress : callable, optional
+        Called with a line of text at every continuation stage and every
+        10 s during a solve (the CLI prints them on standard error).
 
     Returns
     -------
@@ -262,7 +281,7 @@ def optimize_ramp(problem: RampProblem, *, transcription: str = "single_shooting
     _infeasibility_precheck(problem, cases)
     model = SmoothStartup(prof, cases[0][1], rtol=rtol, atol=atol)
     grid = TimeGrid.make(problem.t_max, problem.horizon, dt)
-    lb, ub = prof.bounds()
+    lb, ub = problem.bounds()
     theta0 = np.clip(prof.guess(problem.params.omega_ref, problem.t_max, problem.speed_fraction)
                      if initial is None else np.asarray(initial, dtype=float), lb, ub)
     if theta0.shape != (len(prof.names),):
@@ -271,7 +290,8 @@ def optimize_ramp(problem: RampProblem, *, transcription: str = "single_shooting
     fine = TimeGrid.make(problem.t_max, problem.horizon, PREDICT_DT).t
     run0 = model.run(cases[0][1], theta0, stages[0].widths, grid.t)
     sigma_scale = max(float(np.max(np.abs(run0["sigma"]))), 1e6)
-    solver_args = dict(transcription=transcription, n_shooting=n_shooting, ipopt_options=ipopt_options)
+    solver_args = dict(transcription=transcription, n_shooting=n_shooting, ipopt_options=ipopt_options,
+                       progress=progress)
     phases = ["dynamic", "peak"] if problem.objective == "peak" else ["dynamic"]
     theta, logs, iters, status = theta0, [], 0, "Not_Solved"
     phase_log = []
@@ -314,6 +334,8 @@ def optimize_ramp(problem: RampProblem, *, transcription: str = "single_shooting
     result.active_cases = [cases[i][0] for i in active]
     result.phases = phase_log
     if verify:
+        if progress is not None:
+            progress(f"  solved in {solve_seconds:.1f} s; verifying on the hybrid plant ...")
         _verify(result, cases, smooth_runs)
     return result
 
@@ -365,6 +387,14 @@ def _verify(result: RampResult, cases, smooth_runs) -> None:
         result.notes.append(f"the peak stress is the running load of the burden ({loads} MPa mean)"
                             f"{which(pinned, result.verified)}: no ramp lowers it; the ramp sets only the dynamic "
                             "(start-up) stress")
+    rates = np.asarray(result.values, dtype=float)
+    if prob.profile.kind == "pwl" and len(rates) > 1 and rates.max() >= JUMP_RATIO * rates.min():
+        slow, fast = int(np.argmin(rates)), int(np.argmax(rates))
+        result.notes.append(
+            f"the segment rates differ by a factor of {rates.max() / rates.min():.0f} ({rates.min():.3g} rpm/s in "
+            f"segment {slow + 1}, {rates.max():.4g} rpm/s in segment {fast + 1}): the optimum creeps, then jumps. "
+            "It is the optimum of the smooth model and the hybrid plant confirms its stresses above; if the drive "
+            "must not do that, limit the rate (--max-rate, RampProblem(max_rate=...)) or use fewer segments")
     storm = [n for n, m in {**result.verified}.items() if m.engine.startswith("cvodes")]
     storm += [f"{n} (baseline)" for n, m in result.baseline.items() if m.engine.startswith("cvodes")]
     if storm:

@@ -164,6 +164,29 @@ class NLP:
 TAU = 1e-3
 
 
+#: exponent above which the smooth maximum's exponential continues as its tangent line: exp(beta*x)
+#: overflowed (inf, then NaN gradients: CasADi's "NaN detected") when a trial ramp's stress exceeded the
+#: stage's shift c by more than 709/beta; with the tangent the integrand stays finite and keeps growing
+EXP_CAP = 200.0
+
+
+def exp_capped(x):
+    """exp(x) up to :data:`EXP_CAP`, then its tangent line there (continuous with its slope, finite).
+
+    Parameters
+    ----------
+    x : casadi.SX or casadi.MX
+        Exponent (dimensionless).
+
+    Returns
+    -------
+    casadi.SX or casadi.MX
+        ``exp(x)`` for x <= EXP_CAP, ``exp(EXP_CAP) (1 + x - EXP_CAP)`` above.
+    """
+    # fmin keeps the unused branch finite (if_else evaluates both; inf * 0 would give NaN)
+    return ca.if_else(x <= EXP_CAP, ca.exp(ca.fmin(x, EXP_CAP + 1)), np.exp(EXP_CAP) * (1 + x - EXP_CAP))
+
+
 def objective_quadrature(model: SmoothStartup):
     """Integrands of the time-continuous smooth maxima of |sigma(t)| and |sigma_dyn(t)|.
 
@@ -183,7 +206,7 @@ def objective_quadrature(model: SmoothStartup):
     q = []
     for k, key in enumerate(("sigma", "sigma_dyn")):
         s_ = model.y_expr[OUTPUTS.index(key)] * pq[3]
-        q.append(ca.exp(pq[0] * (s_ - pq[1 + k])) + ca.exp(pq[0] * (-s_ - pq[1 + k])))
+        q.append(exp_capped(pq[0] * (s_ - pq[1 + k])) + exp_capped(pq[0] * (-s_ - pq[1 + k])))
     return ca.vertcat(*q), pq
 
 
@@ -333,9 +356,9 @@ def build_nlp(problem, model: SmoothStartup, cases, grid: TimeGrid, sigma_scale:
     parts = [z0, np.full(n_eps, 10.0)] + [np.ravel(x) for x in extra_w0]
     w0 = np.concatenate(parts)
     n_extra = int(sum(x.shape[0] for x in extra_w))
-    lbw = np.concatenate([lb / theta_scale for lb in [prof.bounds()[0]]] + [np.full(n_eps, -np.inf),
+    lbw = np.concatenate([lb / theta_scale for lb in [problem.bounds()[0]]] + [np.full(n_eps, -np.inf),
                                                                              np.full(n_extra, -np.inf)])
-    ubw = np.concatenate([prof.bounds()[1] / theta_scale, np.full(n_eps, np.inf), np.full(n_extra, np.inf)])
+    ubw = np.concatenate([problem.bounds()[1] / theta_scale, np.full(n_eps, np.inf), np.full(n_extra, np.inf)])
     g_fun = ca.Function("g_eval", [nlp["x"], pp], [gg, f, ca.vertcat(*Js), ca.vertcat(*Jd)])
     return NLP(solver, w0, lbw, ubw, np.array(lbg, float), np.array(ubg, float), n_th, np.asarray(theta_scale),
                names, widths_names, transcription, g_fun, callback, 1.0 / sigma_scale)
