@@ -144,3 +144,37 @@ def test_optimize_ramp_ctrl_c_inside_ipopt(tmp_path):
     _, rest = proc.communicate(timeout=30)
     assert proc.returncode == 130, "".join(lines) + rest
     assert rest.strip() == "kilnctl optimize-ramp: interrupted"
+
+
+BUSY_C = "double busy(long n){ volatile double s = 0; for (long i = 0; i < n; i++) s += i * 1e-9; return s; }\n"
+BUSY_PY = """
+import ctypes, os, signal, sys, threading
+from kilnctl.cli import _interrupts
+lib = ctypes.CDLL(sys.argv[1]); lib.busy.restype = ctypes.c_double; lib.busy.argtypes = [ctypes.c_long]
+with _interrupts() as state:
+    state.command = "kilnctl busy"
+    threading.Timer(0.5, lambda: os.kill(os.getpid(), signal.SIGINT)).start()
+    lib.busy(10**12)  # hours of C code that never checks for signals
+print("not interrupted")
+"""
+
+
+def test_ctrl_c_inside_c_code_that_never_returns(tmp_path):
+    # optimize-ramp pwl:12 spent minutes in one CVODES run, where Python's handler cannot run; the
+    # C-level wakeup descriptor still sees the signal and ends the process after the grace period
+    import shutil
+
+    cc = shutil.which("gcc") or shutil.which("cc")
+    if cc is None:
+        pytest.skip("needs a C compiler")
+    (tmp_path / "busy.c").write_text(BUSY_C)
+    subprocess.run([cc, "-O1", "-shared", "-fPIC", str(tmp_path / "busy.c"), "-o", str(tmp_path / "libbusy.so")],
+                   check=True)
+    (tmp_path / "busy.py").write_text(BUSY_PY)
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    t0 = time.monotonic()
+    proc = subprocess.run([sys.executable, str(tmp_path / "busy.py"), str(tmp_path / "libbusy.so")], env=env,
+                          capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 130 and proc.stdout == ""
+    assert proc.stderr.strip() == "kilnctl busy: interrupted"
+    assert time.monotonic() - t0 < 20

@@ -104,12 +104,21 @@ class _Interrupts:
     #: seconds between the watcher's checks; three misses in a row make it raise again
     POLL = 0.1
 
-    def __init__(self):
+    #: seconds the main thread has to run the Python handler after Ctrl-C before the process is ended from
+    #: a helper thread (the main thread is then inside a long C computation that never checks for signals:
+    #: seen with optimize-ramp pwl:12, minutes inside one CVODES sensitivity run)
+    GRACE = 3.0
+
+    def __init__(self, command: str = "kilnctl"):
         self.done = threading.Event()
+        self.handled = threading.Event()  # the Python handler ran in the main thread
         self.ident = threading.get_ident()
+        self.command = command
+        self.wakeup_r = None
         self.saved_stderr = None  # the real sys.stderr, while the libraries' messages are silenced
 
     def first(self, signum, frame):
+        self.handled.set()
         try:  # nothing here may fail: an exception other than KeyboardInterrupt would be dropped as well
             signal.signal(signal.SIGINT, self.second)
             self._silence_c_stderr()
@@ -126,6 +135,57 @@ class _Interrupts:
                 child.kill()
         os.write(2, b"kilnctl: interrupted again; stopped at once\n")
         os._exit(EXIT_INTERRUPTED)
+
+    def start_wakeup_watch(self) -> int:
+        """Watch SIGINT at the C level (``signal.set_wakeup_fd``), independently of the main thread.
+
+        Returns
+        -------
+        int
+            The previous wakeup file descriptor (to restore).
+        """
+        r, w = os.pipe()
+        os.set_blocking(w, False)
+        previous = signal.set_wakeup_fd(w, warn_on_full_buffer=False)
+        self.wakeup_r, self.wakeup_w = r, w
+        threading.Thread(target=self._wakeup_watch, name="kilnctl-sigint", daemon=True).start()
+        return previous
+
+    def _wakeup_watch(self) -> None:
+        presses = 0
+        while True:
+            try:
+                data = os.read(self.wakeup_r, 64)
+            except OSError:
+                return  # closed: main() is done
+            if not data or self.done.is_set():
+                return
+            presses += data.count(bytes([signal.SIGINT]))
+            if presses == 0:
+                continue
+            again = presses >= 2
+            if again or not self.handled.wait(self.GRACE):
+                if self.done.is_set():
+                    return
+                # a second Ctrl-C, or the main thread cannot run the handler (it is inside C code): end here
+                import multiprocessing
+
+                for child in multiprocessing.active_children():
+                    with contextlib.suppress(Exception):
+                        child.kill()
+                msg = "kilnctl: interrupted again; stopped at once" if again else f"{self.command}: interrupted"
+                os.write(2, (msg + "\n").encode())
+                os._exit(EXIT_INTERRUPTED)
+
+    def stop_wakeup_watch(self, previous: int) -> None:
+        """Restore the previous wakeup descriptor and end the watcher thread."""
+        with contextlib.suppress(ValueError, OSError):
+            signal.set_wakeup_fd(previous)
+        with contextlib.suppress(OSError):
+            os.write(self.wakeup_w, b"\0")  # wakes the watcher, which sees done and returns
+        for fd in (self.wakeup_w, self.wakeup_r):
+            with contextlib.suppress(OSError):
+                os.close(fd)
 
     def _silence_c_stderr(self) -> None:
         """Silence what the libraries print after Ctrl-C; kilnctl's own line goes to :attr:`stderr`.
@@ -192,11 +252,13 @@ def _interrupts():
         return
     state = _Interrupts()
     previous = signal.signal(signal.SIGINT, state.first)
+    previous_wakeup = state.start_wakeup_watch()
     try:
         yield state
     finally:
         state.done.set()
         signal.signal(signal.SIGINT, previous)
+        state.stop_wakeup_watch(previous_wakeup)
         state.restore_stderr()
 
 
@@ -221,6 +283,8 @@ def main(argv=None) -> int:
         try:
             args = build_parser().parse_args(argv)
             command = f"kilnctl {args.command}"
+            if state is not None:
+                state.command = command
             return int(args.func(args) or 0)
         except KilnctlError as exc:
             print(f"{command}: error: {exc}", file=sys.stderr)

@@ -43,6 +43,9 @@ OBJECTIVES = {
 SETTLE_MARGIN_S = 15.0
 #: bounds of a reference rate or acceleration limit [rpm/s]
 RATE_BOUNDS = (1.0, 2000.0)
+#: most segments of a pwl:N profile: pwl:8 solved in 54 s, pwl:12 spent more than 6 minutes in one sensitivity
+#: run at a trial point and was stopped (docs/benchmarks.md, "Long ramp optimizations")
+MAX_PWL_SEGMENTS = 8
 #: bounds of a jerk limit [rpm/s^2]
 JERK_BOUNDS = (1.0, 2.0e4)
 
@@ -95,8 +98,9 @@ class Profile:
         m = re.fullmatch(r"pwl:(\d+)", s)
         if m:
             n = int(m.group(1))
-            if not 1 <= n <= 12:
-                raise ParameterError(f"profile {text!r}: the number of segments must lie in 1..12")
+            if not 1 <= n <= MAX_PWL_SEGMENTS:
+                raise ParameterError(f"profile {text!r}: the number of segments must lie in 1..{MAX_PWL_SEGMENTS} "
+                                     "(more did not finish in reasonable time: docs/benchmarks.md)")
             return cls("pwl", n)
         raise ParameterError(f"unknown profile {text!r}: choose 'constant', 'scurve' or 'pwl:N' (e.g. 'pwl:4')")
 
