@@ -365,7 +365,7 @@ class Horizons:
     """Growing fitting horizons, fractions of the record after the start [-].
 
     The fit on each warm-starts the next, after probing a 3^p grid of small
-    steps around it (p <= 4 coordinates).  Stick-slip cycles make the
+    steps around it (the friction pair, or up to four coordinates).  Stick-slip cycles make the
     simulation-error cost of a long record rugged (a small change of friction
     shifts every later cycle); a short horizon first finds the right basin.
 
@@ -398,13 +398,23 @@ class Smoothing:
     ----------
     widths_s : tuple of float
         Widths [s]; 0 (the residual itself) is always the last.
+    later_s : tuple of float or None
+        Widths on the horizons after the first [s] (None: ``widths_s``):
+        there the fit starts from the previous horizon's, whose events are
+        aligned already, and only the new part needs the narrower widths.
     """
 
     widths_s: tuple = (0.0,)
+    later_s: tuple | None = None
 
-    def schedule(self) -> list[float]:
-        """The widths, widest first, ending with 0."""
-        return sorted({float(w) for w in self.widths_s if float(w) > 0}, reverse=True) + [0.0]
+    def schedule(self, first: bool = True, last: bool = True) -> list[float]:
+        """The widths on a horizon, widest first (``first``, ``last``: on the first, the last horizon).
+
+        The residual itself (width 0) ends the last horizon; on a shorter one the fit only has to find the
+        basin of the next, which the smoothed residual shows."""
+        ws = self.widths_s if first or self.later_s is None else self.later_s
+        out = sorted({float(w) for w in ws if float(w) > 0}, reverse=True)
+        return out + [0.0] if last or not out else out
 
 
 @dataclass
@@ -435,6 +445,7 @@ class _Search:
         self.span = t_active[-1] - t0
         self.diff_step, self.max_nfev, self.tol = diff_step, max_nfev, tol
         self.nfev = 1
+        self.horizon = 1.0
         self.log_coord = np.array([c[0].startswith("ln(") for c in space.coords], bool)
 
     def trial(self, u) -> _Trial:
@@ -452,6 +463,7 @@ class _Search:
         return self.prob.residual(self.trial(u).run)
 
     def set_horizon(self, h):
+        self.horizon = h
         self.prob.mask = self.full_mask & (self.t_act <= self.t0 + h * self.span + 1e-9)
         self.cache.clear()
 
@@ -466,7 +478,7 @@ class _Search:
     def fit_all(self, firsts, horizons: Horizons, smoothing: Smoothing) -> list[_Local]:
         """A local fit from each starting point through every horizon and smoothing width."""
         prob, out = self.prob, []
-        hs, widths = horizons.schedule(), smoothing.schedule()
+        hs = horizons.schedule()
         for u in firsts:
             if out and prob.deadline is not None and time.perf_counter() > prob.deadline:
                 break  # out of time: no further local fit
@@ -477,7 +489,7 @@ class _Search:
                     break
                 if i > 0:
                     u = self.probe(u)
-                for w in widths:
+                for w in smoothing.schedule(first=i == 0, last=i == len(hs) - 1):
                     self.set_smoothing(w)
                     u, J, msg = self.local(u)
             self.set_smoothing(0.0)
@@ -521,8 +533,10 @@ class _Search:
             self.nfev += int(live.sum())
             return _forward_jacobian(self.fun, w, self.diff_step, space.upper, live)[:, live]
 
+        # on a smoothed residual or a shorter horizon the fit only has to find the basin of the next stage
+        tol = self.tol if self.prob.smooth_n <= 1 and self.horizon >= 1.0 else 10 * self.tol
         res = least_squares(f_live, u[live], jac=jac_live, bounds=(space.lower[live], space.upper[live]),
-                            x_scale=1.0, max_nfev=self.max_nfev, method="trf", ftol=self.tol, xtol=self.tol)
+                            x_scale=1.0, max_nfev=self.max_nfev, method="trf", ftol=tol, xtol=tol)
         self.nfev += int(res.nfev)
         w = u.copy()
         w[live] = res.x
@@ -531,17 +545,25 @@ class _Search:
         return w, Jf, res.message
 
     def probe(self, u):
-        """Best of a 3^p grid of small steps around u (3 % linear, 10 % log; p <= 4): run before each
-        longer horizon, where the next cycle may sit in a neighbouring valley."""
-        if u.size == 0 or u.size > 4:
+        """Best of a 3^p grid of small steps around u (3 % linear, 10 % log), run before each longer horizon,
+        where the next stick-slip cycle may sit in a neighbouring valley.  The cycles' timing is set by the
+        friction: the grid spans mu_c and mu_s/mu_c when they are fitted (p = 2), else every coordinate
+        when there are at most four."""
+        if u.size == 0:
             return u
         import itertools
 
         space = self.space
+        friction = [j for j, c in enumerate(space.coords) if c[0] in ("mu_c", "mu_s/mu_c", "mu_s")]
+        axes = friction if friction else (list(range(u.size)) if u.size <= 4 else [])
+        if not axes:
+            return u
         steps = np.where(self.log_coord, 0.1, 0.03 * np.maximum(1.0, np.abs(u)))
         best_u, best_c = u, self.trial(u).cost
-        for d in itertools.product((-1.0, 0.0, 1.0), repeat=u.size):
-            v = np.clip(u + steps * np.array(d), space.lower, space.upper)
+        for d_axes in itertools.product((-1.0, 0.0, 1.0), repeat=len(axes)):
+            d = np.zeros(u.size)
+            d[axes] = d_axes
+            v = np.clip(u + steps * d, space.lower, space.upper)
             c = self.trial(v).cost
             if c < best_c:
                 best_u, best_c = v, c
@@ -707,7 +729,8 @@ class Calibration:
         horizons : sequence of float or Horizons, default (1.0,)
             Growing fitting horizons, as fractions of the record after the
             start [-]: the fit on each warm-starts the next (after probing a
-            3^p grid of small steps around it, p <= 4), and the starting
+            3^p grid of small steps around it: the friction pair, or up to four
+            coordinates), and the starting
             points are compared on the first.  Stick-slip cycles make the
             simulation-error cost of a long record rugged (a small change of
             friction shifts every later cycle); a short horizon first finds

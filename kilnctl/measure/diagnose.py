@@ -33,7 +33,7 @@ import numpy as np
 from ..errors import KilnctlError, ModelError, NotFittedError, close_matches_hint
 from ..params import Parameters
 from ..simulate import resolve_gains
-from .calibrate import Calibration, holdout_masks
+from .calibrate import Calibration, Smoothing, holdout_masks
 from .compare import Comparison, compare_run
 from .effects import CATALOGUE, DEFAULT_CALIBRATE, effect_components, grid_starts
 from .io import Measurement
@@ -328,7 +328,10 @@ class Diagnosis:
                                                                      for s in selected)):
                     continue
                 names.append(name)
-            results = self._try_all(m, params, selected, names, current, scales, train, test, exp, pool, say)
+            before = {r.effect: dict(r.calibration.values_) for r in (rounds[-1] if rounds else [])
+                      if r.calibration is not None}
+            results = self._try_all(m, params, selected, names, current, scales, train, test, exp, pool, say,
+                                    before)
             results.sort(key=lambda r: (not r.supported, r.delta_bic if math.isfinite(r.delta_bic) else math.inf))
             current, results = self._reanchor(m, params, selected, current, results, scales, train, test, exp, say)
             abrupt = self._outside(m, params, selected, current, results, scales, train, test, exp, say)
@@ -387,7 +390,7 @@ class Diagnosis:
                 out.append(f"{name}: {note} (a value outside the usual range is reported, not refused)")
         return out
 
-    def _refit(self, m, params, selected, name, current_values, first_failure, scales, train, exp):
+    def _refit(self, m, params, selected, name, current_values, first_failure, scales, train, exp, before=None):
         """Refit base + ``selected`` + ``name`` on the fitting part (in a worker process when workers > 1).
 
         Returns
@@ -414,21 +417,31 @@ class Diagnosis:
         # the base values from the current model and from the setup: the current model's calibration may sit
         # in a regime (e.g. of the burden friction) that only made up for the missing effect
         setup_base = {k: float(params[k]) for k in self.calibrate if k in init}
+        n_local = None
+        if before:
+            # a later round: the effect's basin was found in the round before (against a model without the
+            # effect selected since).  Start there too, on a third of the grid, with one local fit fewer
+            effect_starts = [{k: v for k, v in before.items() if k not in current_values or k in
+                              ("mu_c", "mu_s")}] + effect_starts[::3]
+            n_local = max(1, self.n_local - 1)
         starts = [dict(g) for g in (effect_starts or [{}])]
         if any(abs(setup_base[k] - init[k]) > 1e-9 * abs(init[k]) for k in setup_base):
             # every second grid point again with the setup's base values
             starts += [dict(setup_base, **g) for g in (effect_starts or [{}])[::2]]
         try:
             cal = self._calibrate(m, params, effects, scales, train, init, starts, experiment=exp,
-                                  first_failure=first_failure, new_effect=name)
+                                  first_failure=first_failure, new_effect=name, n_local=n_local)
         except KilnctlError as exc:
             return None, f"could not be fitted: {exc}", time.perf_counter() - t_start
         return cal, None, time.perf_counter() - t_start
 
-    def _try_all(self, m, params, selected, names, current, scales, train, test, exp, pool, say):
-        """Refit every candidate of a round (in parallel when a pool is given) and judge each one."""
+    def _try_all(self, m, params, selected, names, current, scales, train, test, exp, pool, say, before):
+        """Refit every candidate of a round (in parallel when a pool is given) and judge each one.
+
+        ``before``: each candidate's fitted values in the round before (name -> values), or empty."""
         ff = self._first_failure(m, current, exp)
-        args = [(m, params, tuple(selected), name, dict(current.values_), ff, scales, train, exp) for name in names]
+        args = [(m, params, tuple(selected), name, dict(current.values_), ff, scales, train, exp, before.get(name))
+                for name in names]
         if pool is not None and len(names) > 1:
             # slowest first (the micro model, stick-slip), so that two workers finish together
             order = sorted(range(len(names)), key=lambda i: -_COST_RANK.get(names[i], 1))
@@ -743,14 +756,15 @@ def _schedule(effects, first_failure):
     torque friction law has a rugged cost on a long record (each stick-slip cycle shifts the next) whatever
     else is refitted with it, and the events of a backlash impact or a breakaway must stay aligned in every
     refit.  ``after_first_failure``: from 1 s after the current model's first failing interval (at least
-    30 % of the record; 30 % when it has none) to the whole record in steps of 5 %.
+    30 % of the record; 30 % when it has none) to the whole record in steps of 10 % (four seconds of a 40 s
+    record: one or two stick-slip cycles).
 
     Returns
     -------
     horizons : list of float
         Fractions of the record [-], growing, ending with 1.
-    smoothing : tuple of float
-        Moving-average widths [s], widest first.
+    smoothing : Smoothing
+        Moving-average widths [s], widest first (on later horizons the finest only).
     separation : float
         Least scaled distance between starting points of local fits [-].
     """
@@ -759,10 +773,12 @@ def _schedule(effects, first_failure):
         hz = CATALOGUE[e].horizons
         if hz == "after_first_failure":
             h1 = 0.3 if first_failure is None else min(1.0, max(0.3, first_failure))
-            horizons |= set(np.round(np.append(np.arange(h1, 1.0, 0.05), 1.0), 4))
+            horizons |= set(np.round(np.append(np.arange(h1, 1.0, 0.1), 1.0), 4))
         else:
             horizons |= set(hz)
-    smoothing = tuple(sorted({w for e in effects for w in CATALOGUE[e].smoothing}, reverse=True)) or (0.0,)
+    widths = sorted({w for e in effects for w in CATALOGUE[e].smoothing if w > 0}, reverse=True)
+    # on the later horizons the fit starts aligned: the finest width is enough for the cycles added
+    smoothing = Smoothing(tuple(widths) or (0.0,), later_s=tuple(widths[-1:]) if len(horizons) > 1 else None)
     separation = min([CATALOGUE[e].separation for e in effects] or [1.0])
     return sorted(float(h) for h in horizons), smoothing, separation
 

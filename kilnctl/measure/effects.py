@@ -162,7 +162,7 @@ class Effect:
         Growing fitting horizons (fractions of the record) used when it is
         refitted (see :meth:`~kilnctl.measure.calibrate.Calibration.fit`);
         ``after_first_failure``: first up to 1 s after the current model's
-        first failing interval, then longer by 5 % of the record at a time.
+        first failing interval, then longer by 10 % of the record at a time.
     grid_points : int
         Points of the coarse start grid per parameter.
     separation : float
