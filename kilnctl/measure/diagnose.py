@@ -232,31 +232,45 @@ class Diagnosis:
         return model, comps, p, free
 
     def _calibrate(self, m, params, effects, scales, mask, init, starts=(), experiment=None,
-                   first_failure=None, new_effect=None, n_local=None) -> Calibration:
+                   first_failure=None, new_effect=None, n_local=None, full_schedule=False) -> Calibration:
         model, comps, p, free = self._structure(params, effects)
         cal = Calibration(p, free, model=model, effects=comps, scales=scales, t0=self.t0, max_nfev=self.max_nfev)
-        horizons, smoothing, sep = _schedule(effects, first_failure)
+        horizons, smoothing, sep = _schedule(effects, first_failure, new_effect, full_schedule)
         if n_local is None:
             n_local = self.n_local if new_effect else 1
         return cal.fit(m, mask=mask, init=init, starts=list(starts), experiment=experiment, horizons=horizons,
                        n_local=n_local, separation=sep, smoothing=smoothing)
 
-    def _final_fit(self, m, params, selected, current, exp) -> Calibration:
+    def _final_fit(self, m, params, selected, current, exp, pool=None) -> Calibration:
         """The selected structure refitted on the whole record from several starts; the lowest cost is kept.
 
-        Starts: the greedy search's values (fitted on the fitting part, with other weights), the setup's base
-        values, and a spread over the friction regimes (mu_c x 0.8, 1, 1.25 by mu_s/mu_c from 1.02 to 2.2,
-        geometric): where stick-slip makes the cost rugged a single local fit stops in the first valley it
-        meets.  The local fits and their costs are kept in ``local_fits_`` of the calibration.
+        Two searches (in parallel when a pool is given), each comparing a spread over the friction regimes
+        (mu_c x 0.8, 1, 1.25 by mu_s/mu_c from 1.02 to 2.2, geometric) and running two local fits: one from
+        the greedy search's values (fitted on the fitting part, with other weights), one from the setup's base
+        values.  Where stick-slip makes the cost rugged a single local fit stops in the first valley it meets.
+        The kept calibration's ``local_fits_`` and ``n_starts_`` count both searches.
         """
-        init = dict(current.values_)
-        starts = [{k: float(params[k]) for k in self.calibrate}]
+        greedy = dict(current.values_)
+        setup_base = dict(greedy, **{k: float(params[k]) for k in self.calibrate})
+        spread = []
         if "mu_c" in self.calibrate and "mu_s" in self.calibrate:
-            mu_c = init.get("mu_c", params.mu_c)
-            starts += [{"mu_c": f * mu_c, "mu_s": f * mu_c * r} for f in (0.8, 1.0, 1.25)
-                       for r in np.geomspace(1.02, 2.2, 6)]
-        return self._calibrate(m, params, selected, "std", None, init, starts, experiment=exp,
-                               first_failure=self._first_failure(m, current, exp), n_local=self.n_local + 1)
+            mu_c = greedy.get("mu_c", params.mu_c)
+            spread = [{"mu_c": f * mu_c, "mu_s": f * mu_c * r} for f in (0.8, 1.0, 1.25)
+                      for r in np.geomspace(1.02, 2.2, 6)]
+        ff = self._first_failure(m, current, exp)
+        args = [(m, params, selected, "std", None, init, spread, exp, ff, None, 2, True)
+                for init in (greedy, setup_base)]
+        if pool is not None:
+            light = copy.copy(self)
+            light.__dict__ = {k: v for k, v in self.__dict__.items() if not k.endswith("_")}
+            futures = [pool.submit(_calibrate_job, (light, a)) for a in args]
+            cals = [f.result() for f in futures]
+        else:
+            cals = [self._calibrate(*a) for a in args]
+        best = min(cals, key=lambda c: c.cost_)
+        best.local_fits_ = [f for c in cals for f in c.local_fits_]
+        best.n_starts_ = sum(c.n_starts_ for c in cals)
+        return best
 
     @staticmethod
     def _first_failure(m, cal, exp):
@@ -346,7 +360,7 @@ class Diagnosis:
             current = best.calibration
             say(f"added {best.effect}")
         # final model on the whole record
-        final = self._final_fit(m, params, tuple(selected), current, exp) if selected else base
+        final = self._final_fit(m, params, tuple(selected), current, exp, pool) if selected else base
         self.base_calibration_ = base
         self.final_calibration_ = final
         self.final_search_ = _search_summary(final)
@@ -407,7 +421,7 @@ class Diagnosis:
         model, comps, p, free = self._structure(params, effects)
         # global phase: a coarse grid over the effect's parameters (base at its calibrated values),
         # since output-error costs of impacts and stick-slip cycles have many local minima
-        effect_starts = grid_starts(eff.parameters, eff.grid_points) + list(eff.starts(p, m))
+        effect_starts = grid_starts(eff.parameters, eff.grid_points) + list(eff.starts(p, m)) + eff.usual_starts()
         if name == "torque_friction_law":
             # the law changes what mu_s means.  The first breakaway (set by mu_s alone) is sharp, so the cost
             # has a narrow valley along mu_s = const: a fine grid in mu_s, a coarse one in mu_c
@@ -729,6 +743,15 @@ def _pool(workers: int):
     return ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"))
 
 
+def _calibrate_job(job):
+    """Worker side of Diagnosis._calibrate, without the raw simulation."""
+    diag, args = job
+    cal = diag._calibrate(*args)
+    cal._problem = None
+    cal.run_.response = None
+    return cal
+
+
 def _refit_job(job):
     """Worker side of Diagnosis._refit: the refit without what need not travel back (the raw simulation)."""
     diag, args = job
@@ -749,7 +772,7 @@ def _search_summary(cal: Calibration) -> dict:
             "kept_cost": float(cal.cost_)}
 
 
-def _schedule(effects, first_failure):
+def _schedule(effects, first_failure, new_effect=None, full=False):
     """Horizons, smoothing widths and start separation for refitting a structure (base + ``effects``).
 
     Every effect of the structure contributes, not only the one just added: a structure that holds the
@@ -757,7 +780,10 @@ def _schedule(effects, first_failure):
     else is refitted with it, and the events of a backlash impact or a breakaway must stay aligned in every
     refit.  ``after_first_failure``: from 1 s after the current model's first failing interval (at least
     30 % of the record; 30 % when it has none) to the whole record in steps of 10 % (four seconds of a 40 s
-    record: one or two stick-slip cycles).
+    record: one or two stick-slip cycles).  For an effect of that kind already in the current model (a
+    candidate added on top of it), the current values have its cycles aligned: one horizon of half the record
+    before the whole record lets the new effect settle first.  ``full``: the whole schedule whatever is new
+    (the final refit, from starts spread over the friction regimes).
 
     Returns
     -------
@@ -771,9 +797,11 @@ def _schedule(effects, first_failure):
     horizons = {1.0}
     for e in effects:
         hz = CATALOGUE[e].horizons
-        if hz == "after_first_failure":
+        if hz == "after_first_failure" and (full or e == new_effect):
             h1 = 0.3 if first_failure is None else min(1.0, max(0.3, first_failure))
             horizons |= set(np.round(np.append(np.arange(h1, 1.0, 0.1), 1.0), 4))
+        elif hz == "after_first_failure":
+            horizons.add(0.5)
         else:
             horizons |= set(hz)
     widths = sorted({w for e in effects for w in CATALOGUE[e].smoothing if w > 0}, reverse=True)

@@ -261,6 +261,28 @@ class Effect:
                 out.append(f"{name} = {v:.3g}{unit}, above the usual {lo:g}-{hi:g}{unit}")
         return out
 
+    def usual_starts(self) -> list[dict]:
+        """Starting points from the usual ranges: each end, their middle, 0.3 x the lower and 3 x the upper end.
+
+        The usual range guides the search; the bounds stay wide, so a value outside it is found too.
+
+        Returns
+        -------
+        list of dict
+            One parameter varied at a time [unit of each]; ranges not in the parameter's own unit, and
+            phases, are skipped.
+        """
+        out = []
+        for name, (lo, hi) in self.plausible.items():
+            if name.startswith("phi") or name in self.relative_plausible:
+                continue
+            mid = math.sqrt(lo * hi) if lo > 0 else 0.5 * (lo + hi)
+            fp = next((f for f in self.parameters if f.name == name), None)
+            for v in (0.3 * lo, lo, mid, hi, 3.0 * hi):
+                if fp is None or fp.lower <= v <= fp.upper:
+                    out.append({name: float(v)})
+        return out
+
     def to_dict(self) -> dict:
         """Return the entry as a JSON-ready dictionary."""
         return {"name": self.name, "meaning": self.meaning, "components": list(self.components),
