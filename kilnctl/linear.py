@@ -52,7 +52,7 @@ from .errors import ModelError
 from .params import Parameters
 
 if TYPE_CHECKING:  # pragma: no cover
-    from .design.gains import PIDGains
+    from .gains import PIDGains
 
 __all__ = [
     "CONDITIONS",

@@ -199,7 +199,7 @@ def verify(params: Parameters | None = None, model: str = "macro", t_end: float 
     -------
     Verification
     """
-    from .design import PIDGains
+    from .gains import PIDGains
 
     params = resolve_gains(Parameters() if params is None else params)
     t_r = params.omega_ref / params.ramp_rate
