@@ -71,6 +71,30 @@ class LinearizedPlant:
     x_op: dict
     t_op: float
     params: Parameters = field(repr=False, default=None)
+    _parts: tuple = field(repr=False, default=None)
+
+    def with_gains(self, k_p: float, k_I: float, k_D: float) -> "LinearizedPlant":
+        """The same structure and operating point with other PID gains (the Jacobian re-evaluated, exact).
+
+        The operating state is kept: at speed the gains move only the
+        integrator's value, on which the Jacobian does not depend.
+
+        Parameters
+        ----------
+        k_p, k_I, k_D : float
+            Gains [V/rpm, V/(rpm*s), V*s/rpm].
+
+        Returns
+        -------
+        LinearizedPlant
+        """
+        plant, jac, xs_op, P = self._parts
+        P2 = np.array(P, dtype=float)
+        for nm, v in (("k_p", k_p), ("k_I", k_I), ("k_D", k_D)):
+            P2[NUMERIC_NAMES.index(nm)] = v
+        sys = _state_space(plant, jac, xs_op, self.t_op, P2, name=self.sys.name)
+        params = self.params.replace(gains="given", k_p=k_p, k_I=k_I, k_D=k_D) if self.params is not None else None
+        return LinearizedPlant(sys, self.components, self.modes, self.x_op, self.t_op, params, (plant, jac, xs_op, P2))
 
     def poles(self) -> np.ndarray:
         """Closed-loop poles [rad/s], sorted by real part (slowest first)."""
@@ -180,18 +204,35 @@ def linearize(params: Parameters | None = None, model: str = "macro", *, effects
     P = plant.param_vector(params)
     mf = plant.functions(mode)
     xs_op = np.asarray(mf.project(xs_op, t_op, P)).ravel()  # consistent with the chosen mode's links
-    e, xs, t, sp = plant.equations(mode)
-    f = ca.vertcat(*[e.rates[n] for n in plant.state_names])  # physical units per second
-    y = ca.vertcat(*[e.outputs[n] for n in OUTPUTS])
-    iref = NUMERIC_NAMES.index("omega_ref")
-    jac = ca.Function("lin", [xs, t, sp.vector],
-                      [ca.jacobian(f, xs), ca.jacobian(f, sp.vector)[:, iref], ca.jacobian(y, xs),
-                       ca.jacobian(y, sp.vector)[:, iref]])
+    jac = _jacobian_function(plant, mode)
+    sys = _state_space(plant, jac, xs_op, t_op, P, name=f"{'+'.join(names)} ({burden or 'as running'})")
+    S = plant.scales
+    return LinearizedPlant(sys, names, plant.mode_dict(mode),
+                           {n: float(xs_op[i] * S[i]) for i, n in enumerate(plant.state_names)}, float(t_op), params,
+                           _parts=(plant, jac, xs_op, P))
+
+
+_JAC_CACHE: dict = {}
+
+
+def _jacobian_function(plant, mode):
+    """(xs, t, P) -> (df/dxs, df/d omega_ref, dy/dxs, dy/d omega_ref) of one mode, built once per plant and mode."""
+    key = (id(plant), mode)
+    if key not in _JAC_CACHE:
+        e, xs, t, sp = plant.equations(mode)
+        f = ca.vertcat(*[e.rates[n] for n in plant.state_names])  # physical units per second
+        y = ca.vertcat(*[e.outputs[n] for n in OUTPUTS])
+        iref = NUMERIC_NAMES.index("omega_ref")
+        _JAC_CACHE[key] = (plant, ca.Function("lin", [xs, t, sp.vector],
+                                              [ca.jacobian(f, xs), ca.jacobian(f, sp.vector)[:, iref],
+                                               ca.jacobian(y, xs), ca.jacobian(y, sp.vector)[:, iref]]))
+    return _JAC_CACHE[key][1]
+
+
+def _state_space(plant, jac, xs_op, t_op, P, name="") -> ct.StateSpace:
     As, Bp, Cs, Dp = (np.asarray(m) for m in jac(xs_op, t_op, P))
     S = plant.scales
     A = As / S[None, :]  # d(x)/dt over d(x) with x = S*xs
     C = Cs / S[None, :]
-    sys = ct.ss(A, Bp, C, Dp, states=list(plant.state_names), inputs=["speed_ref"], outputs=list(OUTPUTS),
-                name=f"{'+'.join(names)} ({burden})")
-    return LinearizedPlant(sys, names, plant.mode_dict(mode),
-                           {n: float(xs_op[i] * S[i]) for i, n in enumerate(plant.state_names)}, float(t_op), params)
+    return ct.ss(A, Bp, C, Dp, states=list(plant.state_names), inputs=["speed_ref"], outputs=list(OUTPUTS),
+                 name=name)

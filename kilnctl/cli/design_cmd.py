@@ -38,6 +38,12 @@ def register(sub) -> None:
     p.add_argument("--wn-max", type=float, metavar="W",
                    help="maximum natural frequency of the dominant pole [rad/s] (default: half the drive-train "
                         "torsional mode sqrt(k_po/J_e), 4.5 rad/s with Table 1)")
+    p.add_argument("--effects", metavar="A,B",
+                   help="also check (and retune) the gains on the macro model with these effects added, e.g. "
+                        "speed_sensor_lag,second_motor (names as in 'kilnctl diagnose')")
+    p.add_argument("--model-from", metavar="DIAGNOSE.json",
+                   help="also check (and retune) the gains on the structure and calibrated values a diagnosis "
+                        "learned ('kilnctl diagnose --json' output saved to a file)")
     p.add_argument("--plot", metavar="FILE",
                    help="write the root locus and step responses (format from the extension: png, pdf, svg ...)")
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
@@ -92,10 +98,45 @@ def run(args) -> int:
         fig = result.plot()
         save_figure(fig, args.plot)
         plt.close(fig)
+    learned = _learned(args, params, result, req)
     if args.json:
-        print_json(result.to_dict())
+        out = result.to_dict()
+        if learned is not None:
+            out["learned"] = {"components": list(learned[0]), "selected": learned[1],
+                              **learned[2].to_dict()}
+        print_json(out)
     else:
         print(result.summary())
+        if learned is not None:
+            print(f"\nOn the learned structure ({', '.join(learned[1]) or 'no effect added'}):")
+            print(learned[2].summary())
         if args.plot:
             print(f"\nfigure written to {args.plot}")
     return 0
+
+
+def _learned(args, params, result, req):
+    """The rigid design checked and retuned on --effects / --model-from, or None."""
+    if not (args.effects or args.model_from):
+        return None
+    from ..design.learned import learned_structure, retune
+    from ..gains import PIDGains
+    from ..measure.effects import effect_components
+    from ..model import component_names
+
+    if args.model_from:
+        comps, lp, selected = learned_structure(args.model_from)
+    else:
+        lp, selected = params, []
+    if args.effects:
+        names = [e.strip() for e in args.effects.split(",") if e.strip()]
+        extra, lp = effect_components(names, lp, "macro")
+        base = comps if args.model_from else component_names("macro")
+        comps = tuple(dict.fromkeys(list(base) + [c for c in extra if c not in base]))
+        from ..model import ORDER
+
+        comps = tuple(sorted(comps, key=lambda c: ORDER.index(c) if c in ORDER else len(ORDER)))
+        selected = selected + names
+    g = result.gains
+    lp = lp.replace(gains="given", k_p=g.k_p, k_I=g.k_I, k_D=g.k_D)
+    return comps, selected, retune(lp, comps, PIDGains(g.k_p, g.k_I, g.k_D), req)
