@@ -28,6 +28,11 @@ class Event:
         Component whose mode changed.
     from_mode, to_mode : str
         Modes before and after.
+    rate : float
+        Time derivative of the guard that fired, at the switch [1/s, guards
+        scaled to order one]; NaN for a switch within a cascade that no
+        guard crossing started.  A small rate is a slow (grazing) crossing,
+        whose time is resolved only to (guard tolerance)/rate.
     """
 
     t: float
@@ -35,6 +40,7 @@ class Event:
     component: str
     from_mode: str
     to_mode: str
+    rate: float = float("nan")
 
 
 @dataclass

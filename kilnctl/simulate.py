@@ -193,6 +193,7 @@ class _Engine:
         for _hop in range(32):
             if j is None:
                 return mode, xs, switched
+            rate = float(self.guards(mf, xs, t)[2][j])
             new, gd, i = self.apply(mode, mf, j, xs, t)
             if new in visited:
                 comp = plant.moded[i]
@@ -207,7 +208,7 @@ class _Engine:
                 tried_sliding.add(key)
                 new = mode[:i] + (sliding,) + mode[i + 1:]
                 gd = Guard("sliding_mode", comp.name, gd.expr, sliding)
-            switched.append((gd, mode, new))
+            switched.append((gd, mode, new, rate))
             visited.append(new)
             mode = new
             mf = plant.functions(mode)
@@ -259,9 +260,9 @@ class _Engine:
     def log(self, switched, t):
         """Append the switches of one settle() call to the event list."""
         names = [c.name for c in self.plant.moded]
-        for gd, m_from, m_to in switched:
+        for gd, m_from, m_to, rate in switched:
             i = names.index(gd.component)
-            self.events.append(Event(t, gd.kind, gd.component, m_from[i], m_to[i]))
+            self.events.append(Event(t, gd.kind, gd.component, m_from[i], m_to[i], rate))
             self.pairs[(gd.component, m_from[i], m_to[i])] += 1
 
     # --- main loop -------------------------------------------------------------
