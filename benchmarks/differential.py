@@ -244,13 +244,16 @@ def compare_point(pt: Point, ref_rtol: float = 1e-10) -> Verdict:
 
 
 def sub_dt_pairs(A, B, dt):
-    """Indices of switch pairs in A (into a mode and out of it within dt, same component) with no switch of
-    that component in B within dt: excursions shorter than the reference engine's guard grid."""
+    """Indices of switch pairs in A (into a mode and out of it after some time but within dt, same component)
+    with no switch of that component in B within dt: excursions shorter than the reference engine's guard
+    grid."""
     drop = []
     i = 0
     while i + 1 < len(A):
         (t0, _, c0, _), (t1, _, c1, _) = A[i], A[i + 1]
-        if c0 == c1 and t1 - t0 < dt and not any(cb == c0 and abs(tb - t0) < dt for tb, _, cb, _ in B):
+        # an excursion takes time (a zero-time cascade, e.g. a release handed on to free running, is not one)
+        if (c0 == c1 and 1e-9 < t1 - t0 < dt
+                and not any(cb == c0 and abs(tb - t0) < dt for tb, _, cb, _ in B)):
             drop += [i, i + 1]
             i += 2
         else:

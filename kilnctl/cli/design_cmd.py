@@ -108,7 +108,8 @@ def run(args) -> int:
     else:
         print(result.summary())
         if learned is not None:
-            print(f"\nOn the learned structure ({', '.join(learned[1]) or 'no effect added'}):")
+            print(f"\nLearned structure: the macro model with {', '.join(learned[1]) or 'no effect added'}"
+                  + (f" (from {args.model_from})" if args.model_from else ""))
             print(learned[2].summary())
         if args.plot:
             print(f"\nfigure written to {args.plot}")

@@ -115,7 +115,7 @@ class LoopCheck:
                     continue
                 kind = "" if r["moved"] else "   (not moved by the gains)"
                 lines.append(f"    omega_n {r['omega_n_rad_s']:8.3f} rad/s  f {r['f_hz']:6.3f} Hz  "
-                             f"zeta {r['zeta']:7.3f}{kind}")
+                             f"zeta {r['zeta'] + 0.0:7.3f}{kind}")
         lines.append("  " + self.verdict())
         return "\n".join(lines)
 
