@@ -11,7 +11,9 @@ and writes its figures into ``DIR``:
    ``startup_micro.png``, ``startup_micro.csv``);
 4. the start-up ramp that lowers the start-up (dynamic) gear stress
    (``ramp_optimization.png``, the report ``ramp/optimize_ramp.html``);
-5. the diagnosis of the example measurement (``diagnose/diagnose.html``).
+5. the diagnosis of the example measurement (``diagnose/diagnose.html``);
+6. the gains of step 2 checked (and retuned) on the structure the diagnosis
+   learned (:mod:`kilnctl.design.learned`).
 """
 
 from __future__ import annotations
@@ -131,6 +133,22 @@ def main(argv=None) -> int:
           "supported when it passes both; the best one is added and the search repeats.")
 
     diagnose_example(out, progress=lambda line: print("  " + line))
+    print(f"  ({time.perf_counter() - t0:.1f} s)")
+
+    # --- close the loop: the designed gains on the model the measurement taught ---------------
+    t0 = _step("6. Close the loop: the gains of step 2 on the model the measurement taught")
+    from .design.learned import learned_structure, retune
+
+    comps, learned, selected = learned_structure(out / "diagnose" / "diagnose.json")
+    g = design.gains
+    learned = learned.replace(gains="given", k_p=g.k_p, k_I=g.k_I, k_D=g.k_D)
+    r = retune(learned, comps, g)
+    print(f"  learned structure: the macro model with {', '.join(selected) or 'nothing added'}, calibrated values "
+          "from step 5 (kilnctl design --model-from out/diagnose/diagnose.json does the same)")
+    print("  " + r.summary().split("\n\n")[0])
+    print("  rigid gains: " + r.before.verdict())
+    if r.after is not r.before:
+        print("  retuned:     " + r.after.verdict())
     print(f"  ({time.perf_counter() - t0:.1f} s)")
 
     print(f"\nDone: figures and data in {out}/")

@@ -126,7 +126,7 @@ def _learned(args, params, result, req):
     from ..model import component_names
 
     if args.model_from:
-        comps, lp, selected = learned_structure(args.model_from)
+        comps, lp, selected = learned_structure(args.model_from, base=params)
     else:
         lp, selected = params, []
     if args.effects:

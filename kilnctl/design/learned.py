@@ -327,7 +327,7 @@ def retune(params: Parameters, components, gains: PIDGains | None = None,
     return Retuned(before, after, best[0], best[1], scan)
 
 
-def learned_structure(path, model: str | None = None):
+def learned_structure(path, model: str | None = None, base: Parameters | None = None):
     """The plant structure and calibrated parameters a ``kilnctl diagnose --json`` file describes.
 
     Parameters
@@ -336,12 +336,15 @@ def learned_structure(path, model: str | None = None):
         JSON written by ``kilnctl diagnose --json`` (or ``diagnose.json`` of its ``--report`` folder).
     model : str, optional
         Base model (default: the one the diagnosis used).
+    base : Parameters, optional
+        The setup the record was diagnosed with (default: Table 1); the
+        diagnosis' calibrated values replace its entries.
 
     Returns
     -------
     components : tuple of str
     params : Parameters
-        Table 1 with the diagnosis' final calibrated values and the selected effects' options.
+        ``base`` with the diagnosis' final calibrated values and the selected effects' options.
     selected : list of str
         The selected effects.
 
@@ -371,6 +374,7 @@ def learned_structure(path, model: str | None = None):
                               "the JSON that 'kilnctl diagnose --json' printed")
     model = model or d.get("settings", {}).get("model") or "macro"
     values = {k: v["value"] for k, v in d["final_parameters"].items() if isinstance(v, dict) and "value" in v}
-    params = Parameters().replace(**values) if values else Parameters()
+    base = Parameters() if base is None else base
+    params = base.replace(**values) if values else base
     extra, params = effect_components(list(d["selected"]), params, model)
     return component_names(model, extra), params, list(d["selected"])
