@@ -204,3 +204,37 @@ def test_best_step_against_brute_force():
     assert s["rss"] == pytest.approx(rss, rel=1e-9) and s["size"] == pytest.approx(size, rel=1e-9)
     assert s["rss_constant"] == pytest.approx(float(np.sum((e - e.mean()) ** 2)), rel=1e-12)
     assert best_step(t, e, t_min=20.0) is None  # no allowed step time
+
+
+def test_time_limit_ends_the_fit_at_the_best_values_found_even_in_a_thread():
+    # truth: with a budget smaller than one simulation no trial after the first can run, so the fit must return
+    # the values it started from (a signal-based limit could not run in a thread at all); without a budget the
+    # same fit moves to the generating value mu_c = 0.37
+    from concurrent.futures import ThreadPoolExecutor
+
+    m = _record(GIVEN.replace(mu_c=0.37), seed=13)
+
+    def fit(limit):
+        return Calibration(GIVEN, ["mu_c"], time_limit_s=limit).fit(m, init={"mu_c": 0.40}, starts=[], n_local=1)
+
+    with ThreadPoolExecutor(max_workers=1) as ex:
+        cut = ex.submit(fit, 1e-6).result()
+    assert cut.values_["mu_c"] == pytest.approx(0.40, rel=1e-9)
+    assert cut.n_failed_ >= 1
+    full = fit(None)
+    assert full.values_["mu_c"] == pytest.approx(0.37, rel=0.01)
+    assert full.cost_ < cut.cost_
+
+
+def test_strategies_schedule_horizons_and_widths():
+    # truth: the documented schedules, by hand
+    from kilnctl.measure.calibrate import Horizons, Smoothing, Starts
+
+    assert Horizons((0.5, 0.3)).schedule() == [0.3, 0.5, 1.0]
+    sm = Smoothing((0.1, 0.4), later_s=(0.1,))
+    assert sm.schedule() == [0.4, 0.1, 0.0]
+    assert sm.schedule(first=False, last=False) == [0.1]
+    assert Smoothing().schedule(first=False, last=False) == [0.0]
+    u = [np.array([0.0]), np.array([0.5]), np.array([3.0]), np.array([0.6])]
+    # the given point, the best of the rest however close (0.5), then the next that lies apart (3.0, not 0.6)
+    assert [float(x[0]) for x in Starts(None, 3, 1.0).choose(u, [9.0, 1.0, 3.0, 2.0])] == [0.0, 0.5, 3.0]

@@ -38,7 +38,7 @@ from .compare import Comparison, compare_run
 from .effects import CATALOGUE, DEFAULT_CALIBRATE, effect_components, grid_starts
 from .io import Measurement
 from .runner import CHANNELS, kiln_angle
-from .stats import best_step, failing_intervals, fit_percent, residual_spectrum, robust_sigma
+from .stats import best_step, failing_intervals, fit_percent, robust_sigma
 from . import report as _report
 from .report import format_fit as _fmt_fit, json_number as _num, unit_of as _unit
 
@@ -149,7 +149,7 @@ class Diagnosis:
         Start of the experiment in record time [s].
     max_nfev : int, default 60
         Optimizer evaluations per refit.
-    n_local : int, default 3
+    n_local : int, default 2
         Local fits per candidate, from the best starting points of its grid
         that lie apart (see :meth:`Calibration.fit`).
     workers : int, default 1
@@ -197,7 +197,7 @@ class Diagnosis:
     def __init__(self, params: Parameters | None = None, calibrate=DEFAULT_CALIBRATE, candidates=None, *,
                  model: str = "macro", holdout: str = "blocks", holdout_fraction: float = 0.3,
                  min_delta_bic: float = 10.0, min_holdout_gain: float = 2.0, max_effects: int = 3,
-                 t0: float | None = None, max_nfev: int = 60, n_local: int = 3, workers: int = 1):
+                 t0: float | None = None, max_nfev: int = 60, n_local: int = 2, workers: int = 1):
         self.params = Parameters() if params is None else params
         self.calibrate = tuple(calibrate)
         if candidates is not None:
@@ -245,9 +245,10 @@ class Diagnosis:
         """The selected structure refitted on the whole record from several starts; the lowest cost is kept.
 
         Two searches (in parallel when a pool is given), each comparing a spread over the friction regimes
-        (mu_c x 0.8, 1, 1.25 by mu_s/mu_c from 1.02 to 2.2, geometric) and running two local fits: one from
-        the greedy search's values (fitted on the fitting part, with other weights), one from the setup's base
-        values.  Where stick-slip makes the cost rugged a single local fit stops in the first valley it meets.
+        (mu_c x 0.8, 1, 1.25 by mu_s/mu_c from 1.02 to 2.2, geometric): one from the greedy search's values
+        (fitted on the fitting part, with other weights), one from the setup's base values; each runs a local
+        fit from its best point, and where the structure has stick-slip (a rugged cost) also from its
+        starting values.  Where stick-slip makes the cost rugged a single local fit stops in the first valley it meets.
         The kept calibration's ``local_fits_`` and ``n_starts_`` count both searches.
         """
         greedy = dict(current.values_)
@@ -258,7 +259,9 @@ class Diagnosis:
             spread = [{"mu_c": f * mu_c, "mu_s": f * mu_c * r} for f in (0.8, 1.0, 1.25)
                       for r in np.geomspace(1.02, 2.2, 6)]
         ff = self._first_failure(m, current, exp)
-        args = [(m, params, selected, "std", None, init, spread, exp, ff, None, 2, True)
+        # where the cost is rugged (stick-slip) each search also runs a local fit from its best spread point
+        rugged = any(CATALOGUE[e].horizons == "after_first_failure" for e in selected)
+        args = [(m, params, selected, "std", None, init, spread, exp, ff, None, 2 if rugged else 1, True)
                 for init in (greedy, setup_base)]
         if pool is not None:
             light = copy.copy(self)

@@ -67,11 +67,6 @@ def _last_of_each_time(t) -> np.ndarray:
     return len(t) - 1 - idx
 
 
-def _unique(t, y):
-    """Keep the last value at each duplicated time (the state after a switch)."""
-    keep = _last_of_each_time(t)
-    return t[keep], y[keep]
-
 
 def kiln_angle(t, speed_rpm, n) -> np.ndarray:
     """Kiln angle from the motor speed by trapezoidal integration [rad].
