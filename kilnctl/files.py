@@ -20,6 +20,19 @@ __all__ = ["write_atomic", "atomic_path", "read_toml"]
 _BOM = "\ufeff"
 
 
+def _umask() -> int:
+    """The process umask: from /proc on Linux (no change of process state), else set and restored at once."""
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("Umask:"):
+                return int(line.split()[1], 8)
+    except (OSError, ValueError, IndexError):
+        pass
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
 @contextlib.contextmanager
 def atomic_path(path, suffix: str | None = None):
     """Yield a temporary path beside ``path``; rename it to ``path`` if the block succeeds.
@@ -43,6 +56,10 @@ def atomic_path(path, suffix: str | None = None):
     os.close(fd)
     try:
         yield Path(tmp)
+        # mkstemp makes the file private (0600); an output gets the mode any new file gets here (0644 under
+        # the usual umask 022), like the outputs written without a temporary file
+        if os.path.exists(tmp):
+            os.chmod(tmp, 0o666 & ~_umask())
         os.replace(tmp, path)
     except BaseException:
         if os.path.exists(tmp):

@@ -46,3 +46,17 @@ def test_table_markdown_json_and_verdicts(tmp_path):
     data = json.loads((tmp_path / "table.json").read_text())
     assert data["rows"][0]["kilnctl"] == "842 A" and data["study"] == "figX"
     assert "note: Table 1" in tab.to_text()
+
+
+def test_outputs_get_the_mode_of_any_new_file(tmp_path):
+    # truth: a file created by open() in the same folder under the same umask (figures and reports were 0600,
+    # other outputs 0644: issue 14)
+    import os
+    import stat
+
+    from kilnctl.files import write_atomic
+
+    plain = tmp_path / "plain.txt"
+    plain.write_text("x")
+    out = write_atomic(tmp_path / "report.html", "<p>x</p>")
+    assert stat.S_IMODE(os.stat(out).st_mode) == stat.S_IMODE(os.stat(plain).st_mode)
