@@ -23,7 +23,11 @@ the reference.  Two checks per point:
   cycling the event times of a default run drift by up to about 1e-4 s per
   cycle, a restick after a slide of several seconds can be 1.3 ms late, and a
   current read at a fixed instant inherits that drift, hence the looser bound
-  on the final current.
+  on the final current.  The end of a current-limit slide is timed to 20 ms:
+  its guard (the rate of the unlimited current's rate with the integrator
+  frozen) contains the rate of the mesh force, so on the micro model it rides
+  on the mesh vibration, and a default run ended one slide 7.9 ms early (same
+  switches, same peaks; rtol 1e-9 gives the reference time).
 
 The CVODES engine checks guards only on the output grid (every dt), the
 compiled stepper also at every step end: a guard excursion shorter than dt (the
@@ -67,7 +71,7 @@ import numpy as np
 TIGHT_TOLERANCE = {"peak_current": (1e-5, 1e-3), "final_current": (1e-5, 1e-3), "peak_stress": (2e-5, 100.0),
                    "event_dt": 1e-5, "guard": 1e-7}
 DEFAULT_TOLERANCE = {"peak_current": (2e-4, 0.05), "final_current": (5e-3, 0.5), "peak_stress": (5e-4, 5e3),
-                     "event_dt": 5e-4, "guard": 1e-5}
+                     "event_dt": 5e-4, "guard": 1e-5, "sliding_end": 2e-2}
 START_WINDOW = 1e-3
 
 #: the structures the search draws from: (model, effects added, friction law)
@@ -268,8 +272,8 @@ def _disagreements(label, a, b, tol, dt=1e-3) -> list[str]:
             break
         # a slow (grazing) crossing is timed only to (guard error)/(guard rate): compare what the guard does
         rate = np.nanmin([abs(ra), abs(rb)]) if not (np.isnan(ra) and np.isnan(rb)) else np.inf
-        if (abs(ta - tb) > tol["event_dt"] * (k + 1) and abs(ta - tb) * rate > tol["guard"]
-                and max(ta, tb) > START_WINDOW):
+        dt_allowed = tol["event_dt"] * (k + 1) + (tol.get("sliding_end", 0.0) if ka == "sliding_end" else 0.0)
+        if abs(ta - tb) > dt_allowed and abs(ta - tb) * rate > tol["guard"] and max(ta, tb) > START_WINDOW:
             out.append(f"{label}: event {k} ({ca_}.{ka}) at {ta:.7f} s vs {tb:.7f} s")
             break
     return out
