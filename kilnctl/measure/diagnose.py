@@ -259,9 +259,13 @@ class Diagnosis:
             spread = [{"mu_c": f * mu_c, "mu_s": f * mu_c * r} for f in (0.8, 1.0, 1.25)
                       for r in np.geomspace(1.02, 2.2, 6)]
         ff = self._first_failure(m, current, exp)
-        # where the cost is rugged (stick-slip) each search also runs a local fit from its best spread point
         rugged = any(CATALOGUE[e].horizons == "after_first_failure" for e in selected)
-        args = [(m, params, selected, "std", None, init, spread, exp, ff, None, 2 if rugged else 1, True)
+        if rugged:
+            # stick-slip: one search over both starting points and the spread, four local fits (the setting
+            # that reached the true structure's optimum on torque law + second motor records, seeds 101-103)
+            return self._calibrate(m, params, selected, "std", None, greedy, [setup_base] + spread, exp, ff, None,
+                                   self.n_local + 2, True)
+        args = [(m, params, selected, "std", None, init, spread, exp, ff, None, 1, True)
                 for init in (greedy, setup_base)]
         if pool is not None:
             light = copy.copy(self)
@@ -435,7 +439,11 @@ class Diagnosis:
         # in a regime (e.g. of the burden friction) that only made up for the missing effect
         setup_base = {k: float(params[k]) for k in self.calibrate if k in init}
         n_local = None
-        if before:
+        rugged = any(CATALOGUE[e].horizons == "after_first_failure" for e in effects)
+        if rugged:
+            # stick-slip in the structure: the cost is rugged, one more local fit and no warm-start shortcut
+            n_local = self.n_local + 1
+        elif before:
             # a later round: the effect's basin was found in the round before (against a model without the
             # effect selected since).  Start there too, on a third of the grid, with one local fit fewer
             effect_starts = [{k: v for k, v in before.items() if k not in current_values or k in
@@ -783,10 +791,9 @@ def _schedule(effects, first_failure, new_effect=None, full=False):
     else is refitted with it, and the events of a backlash impact or a breakaway must stay aligned in every
     refit.  ``after_first_failure``: from 1 s after the current model's first failing interval (at least
     30 % of the record; 30 % when it has none) to the whole record in steps of 10 % (four seconds of a 40 s
-    record: one or two stick-slip cycles).  For an effect of that kind already in the current model (a
-    candidate added on top of it), the current values have its cycles aligned: one horizon of half the record
-    before the whole record lets the new effect settle first.  ``full``: the whole schedule whatever is new
-    (the final refit, from starts spread over the friction regimes).
+    record: one or two stick-slip cycles), for every refit of such a structure: a cheaper schedule for
+    candidates added on top of a torque-law model (half the record, then all) missed a second motor and a
+    viscous drag that the full schedule found (40 s records, seeds 101 and 102).
 
     Returns
     -------
@@ -800,11 +807,9 @@ def _schedule(effects, first_failure, new_effect=None, full=False):
     horizons = {1.0}
     for e in effects:
         hz = CATALOGUE[e].horizons
-        if hz == "after_first_failure" and (full or e == new_effect):
+        if hz == "after_first_failure":
             h1 = 0.3 if first_failure is None else min(1.0, max(0.3, first_failure))
             horizons |= set(np.round(np.append(np.arange(h1, 1.0, 0.1), 1.0), 4))
-        elif hz == "after_first_failure":
-            horizons.add(0.5)
         else:
             horizons |= set(hz)
     widths = sorted({w for e in effects for w in CATALOGUE[e].smoothing if w > 0}, reverse=True)
