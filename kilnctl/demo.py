@@ -144,7 +144,7 @@ def main(argv=None) -> int:
     learned = learned.replace(gains="given", k_p=g.k_p, k_I=g.k_I, k_D=g.k_D)
     r = retune(learned, comps, g)
     print(f"  learned structure: the macro model with {', '.join(selected) or 'nothing added'}, calibrated values "
-          "from step 5 (kilnctl design --model-from out/diagnose/diagnose.json does the same)")
+          f"from step 5 (kilnctl design --model-from {out / 'diagnose' / 'diagnose.json'} does the same)")
     print("  " + r.summary().split("\n\n")[0])
     print("  rigid gains: " + r.before.verdict())
     if r.after is not r.before:
