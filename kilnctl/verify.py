@@ -183,7 +183,8 @@ def _linear_run(params, gains, condition, t):
     return {"t": t, "speed_rpm": w, "i_a": i, "figures": ramp_figures(t, w, i, params)}
 
 
-def verify(params: Parameters | None = None, model: str = "macro", t_end: float = 40.0) -> Verification:
+def verify(params: Parameters | None = None, model: str = "macro", t_end: float = 40.0, *, effects=(),
+           components=None) -> Verification:
     """Run the designed (or given) gains on the nonlinear plant and compare with the linear design.
 
     Parameters
@@ -194,6 +195,12 @@ def verify(params: Parameters | None = None, model: str = "macro", t_end: float 
         Nonlinear model to verify on.
     t_end : float
         Simulated time [s]; must cover the ramp (omega_ref / ramp_rate).
+    effects : sequence of str
+        Components added to the nonlinear model (a structure a diagnosis
+        learned: ``second_motor``, ``speed_sensor_lag`` ...); the linear
+        prediction stays the design's rigid model.
+    components : sequence of str, optional
+        The full nonlinear component list instead of ``model``/``effects``.
 
     Returns
     -------
@@ -206,7 +213,7 @@ def verify(params: Parameters | None = None, model: str = "macro", t_end: float 
     if not t_end > t_r:
         raise SimulationError(f"t_end = {t_end} s must exceed the ramp time omega_ref/ramp_rate = {t_r:.3g} s")
     gains = PIDGains(params.k_p, params.k_I, params.k_D)
-    nl = simulate(params, model, t_end)
+    nl = simulate(params, model, t_end, effects=effects, components=components)
     t = np.linspace(0.0, t_end, int(round(t_end / 5e-3)) + 1)
     linear = {c: _linear_run(params, gains, c, t) for c in ("stick", "slip")}
     tt, uniq = np.unique(nl.t, return_index=True)

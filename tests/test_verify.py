@@ -51,3 +51,21 @@ def test_verify_cli_json(capsys, tmp_path):
     assert out["gains"]["kp"] == 0.08 and {r["quantity"] for r in out["table"]} >= {"peak_current_A"}
     assert main(["verify", "--config", str(f), "--t-end", "3"]) == 2  # shorter than the 6.76 s ramp
     assert "ramp time" in capsys.readouterr().err
+
+
+def test_verify_on_a_learned_structure(capsys):
+    # truth: the same start-up simulated directly with the effect added (kilnctl.simulate), and the second
+    # motor's inertia raises the start-up current (it must be accelerated with the first)
+    import json
+
+    from kilnctl import Parameters
+    from kilnctl.cli import main
+    from kilnctl.simulate import resolve_gains, simulate
+
+    assert main(["verify", "--effects", "second_motor", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    row = next(r for r in out["table"] if r["quantity"] == "peak_current_A")
+    direct = simulate(resolve_gains(Parameters()), "macro", 40.0, effects=["second_motor"])
+    assert row["nonlinear"] == pytest.approx(float(abs(direct["i_a"]).max()), rel=1e-9)
+    plain = simulate(resolve_gains(Parameters()), "macro", 40.0)
+    assert row["nonlinear"] > float(abs(plain["i_a"]).max())

@@ -26,6 +26,11 @@ def register(sub) -> None:
     add_config_arg(p)
     p.add_argument("--model", choices=("macro", "micro"), default="macro", help="nonlinear model (default macro)")
     p.add_argument("--t-end", type=float, default=40.0, metavar="S", help="simulated time [s] (default 40)")
+    p.add_argument("--effects", metavar="A,B",
+                   help="add effects to the nonlinear plant (names as in 'kilnctl diagnose', e.g. second_motor)")
+    p.add_argument("--model-from", metavar="DIAGNOSE.json",
+                   help="verify on the structure and calibrated values a diagnosis learned ('kilnctl diagnose "
+                        "--json' output saved to a file); the gains stay those of --config or the design")
     p.add_argument("--plot", metavar="FILE", help="write the comparison figure (format from the extension)")
     p.add_argument("--report", metavar="DIR", help="write verify.html (one page, figure embedded), verify.json and "
                    "verify.png into DIR")
@@ -40,7 +45,27 @@ def run(args) -> int:
 
     if args.plot and args.config and Path(args.plot).resolve() == Path(args.config).resolve():
         raise ConfigFileError(f"--plot {args.plot} is the --config file: refusing to overwrite it")
-    v = verify(load_params(args), model=args.model, t_end=args.t_end)
+    params = load_params(args)
+    components = None
+    if args.model_from or args.effects:
+        from ..measure.effects import effect_components
+        from ..model import component_names
+        from ..simulate import resolve_gains
+
+        params = resolve_gains(params)  # the gains of the config or the rigid design, kept on the learned plant
+        gains = {k: params[k] for k in ("k_p", "k_I", "k_D")}
+        base, selected = component_names(args.model), []
+        if args.model_from:
+            from ..design.learned import learned_structure
+
+            base, params, selected = learned_structure(args.model_from, model=args.model, base=params)
+            params = params.replace(gains="given", **gains)
+        if args.effects:
+            names = [e.strip() for e in args.effects.split(",") if e.strip()]
+            extra, params = effect_components(names, params, args.model)
+            base = component_names(args.model, [c for c in base if c not in component_names(args.model)] + list(extra))
+        components = base
+    v = verify(params, model=args.model, t_end=args.t_end, components=components)
     if args.plot:
         save_figure(v.plot(), args.plot)
     if args.report:
@@ -52,6 +77,12 @@ def run(args) -> int:
     else:
         g = v.params
         print(f"gains: k_p = {g.k_p:.4g} V/rpm, k_I = {g.k_I:.4g} V/(rpm*s), k_D = {g.k_D:.4g} V*s/rpm")
+        if components is not None:
+            from ..model import component_names
+
+            added = [c for c in components if c not in component_names(args.model)]
+            print(f"nonlinear plant: the {args.model} model with {', '.join(added) or 'nothing added'}"
+                  + (f" and the calibrated values of {args.model_from}" if args.model_from else ""))
         print(v)
         if args.report:
             print(f"wrote {args.report}/verify.html, verify.json, verify.png")
