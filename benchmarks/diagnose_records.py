@@ -104,9 +104,9 @@ def _out_of_range() -> list[RecordSpec]:
     cases = {
         "second_motor": [("0.3x", {"J_m2": 3.0}), ("3x", {"J_m2": 135.0})],
         # no current_limit: its plausible range is a fraction of the unlimited peak current (0.9-0.98); 3x its
-        # upper end is never reached, and at 0.3x its lower end (0.27) kilnctl's simulator and the effect
-        # plant both stop at 5.8 s on a current limit that chatters without time passing; with the paper's
-        # friction law any limit below the peak (which is the steady sliding load) stalls the start-up
+        # upper end is never reached, and at 0.3x its lower end (0.27) the start-up stalls (kilnctl: the kiln
+        # rolls back, which read_csv refuses; the effect plant stops at 5.8 s on a current limit that chatters,
+        # having no sliding mode); with the paper's law any limit below the peak (the steady sliding load) stalls
         "drivetrain_compliance": [("0.3x", {"k_po": 1.5e7, "C_po": 6e5}), ("3x", {"k_po": 1.5e9, "C_po": 6e7})],
         "backlash": [("0.3x", {"delta_x": 0.0012}), ("3x", {"delta_x": 0.048})],
         "speed_sensor_lag": [("0.3x", {"tau_s": 0.0006}), ("3x", {"tau_s": 0.018})],
