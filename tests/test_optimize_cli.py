@@ -53,3 +53,25 @@ def test_errors_exit_2_with_a_message(config, capsys):
     assert "pwl:N" in capsys.readouterr().err
     assert main(["optimize-ramp", "--config", str(config), "--plot", str(config)]) == 2
     assert "refusing" in capsys.readouterr().err
+
+
+def test_optimize_ramp_with_an_effect(capsys):
+    # truth: the hybrid micro model with the second motor measured directly (measure_hybrid) at the optimum the
+    # CLI reports; and the added rotor inertia must raise the dynamic start-up stress of the 74 rpm/s baseline
+    import json
+
+    from kilnctl import Parameters
+    from kilnctl.cli import main
+    from kilnctl.optimize import measure_hybrid
+    from kilnctl.optimize.problem import Profile
+
+    assert main(["optimize-ramp", "--objective", "dynamic", "--effects", "second_motor", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    p = Parameters()
+    m, _ = measure_hybrid(p, Profile.parse("constant"), [out["ramp"]["rate_rpm_s"]], out["horizon_s"],
+                          effects=("second_motor",))
+    assert out["dynamic_stress_verified_Pa"] == pytest.approx(m.peak_dynamic_stress_Pa, rel=1e-6)
+    plain, _ = measure_hybrid(p, Profile.parse("constant"), [74.0], out["horizon_s"])
+    assert out["baseline_dynamic_stress_Pa"] > plain.peak_dynamic_stress_Pa
+    assert main(["optimize-ramp", "--effects", "drivetrain_compliance"]) == 2
+    assert "mode-free effects" in capsys.readouterr().err

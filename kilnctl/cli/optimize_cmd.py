@@ -61,6 +61,12 @@ def register(sub) -> None:
     p.add_argument("--max-rate", type=float, default=None, metavar="RPM_S",
                    help="largest rate of the reference [rpm/s] (every pwl segment, the constant rate, the "
                         "S-curve's acceleration); default 2000. Forbids a ramp that creeps and then jumps")
+    p.add_argument("--effects", metavar="A,B",
+                   help="mode-free effects on the micro model, in the optimization and the verification "
+                        "(second_motor, speed_sensor_lag, kiln_unbalance, viscous_drag)")
+    p.add_argument("--model-from", metavar="DIAGNOSE.json",
+                   help="optimize on the effects and calibrated values a diagnosis learned ('kilnctl diagnose "
+                        "--json' output saved to a file); its effects must be mode-free")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
     p.add_argument("--quiet", action="store_true", help="no progress lines on stderr (--json implies it)")
     p.set_defaults(func=run)
@@ -100,9 +106,17 @@ def run(args) -> int:
 
     _check_plot(args)
     params = load_params(args)
+    effects = [e.strip() for e in (args.effects or "").split(",") if e.strip()]
+    if args.model_from:
+        from ..design.learned import learned_structure
+
+        comps, params, _ = learned_structure(args.model_from, model="micro", base=params)
+        from ..model import component_names
+
+        effects += [c for c in comps if c not in component_names("micro") and c not in effects]
     problem = RampProblem(params, profile=args.profile, t_max=args.t_max, horizon=args.horizon,
                           objective=args.objective, scenarios=default_scenarios() if args.robust else (),
-                          max_rate=args.max_rate)
+                          max_rate=args.max_rate, effects=tuple(effects))
     progress = None
     if not (args.quiet or args.json):
         print(f"kilnctl optimize-ramp: {problem.profile.label} ramp, {len(problem.profile.names)} number(s) to "

@@ -29,7 +29,7 @@ from ..model.smooth import SMOOTH_DS, SMOOTH_V
 from ..params import Parameters
 from .problem import Profile
 
-__all__ = ["SmoothStartup", "load_stress", "OUTPUTS", "smooth_components", "hybrid_components"]
+__all__ = ["SmoothStartup", "load_stress", "OUTPUTS", "smooth_components", "hybrid_components", "check_effects"]
 
 #: tolerance factors tried in turn when CVODES fails (seen: a trial Newton iterate at the backlash impact
 #: made the right-hand side non-finite at rtol 1e-8, while 1e-7 and 1e-9 ran)
@@ -45,37 +45,84 @@ _HYBRID_CORE = ("pid", "voltage_limit", "dc_motor", "current_limit", "coupling",
                 "bearing_friction", "burden", "bending_stress")
 
 
-def smooth_components(profile: Profile) -> tuple[str, ...]:
+def check_effects(effects) -> tuple[str, ...]:
+    """Effects the ramp optimization can carry: components without modes (smooth as they are).
+
+    Parameters
+    ----------
+    effects : sequence of str
+        Component names (``second_motor``, ``speed_sensor_lag``, ``kiln_unbalance``, ``viscous_drag``).
+
+    Returns
+    -------
+    tuple of str
+
+    Raises
+    ------
+    ModelError
+        An unknown component, or one with modes (it has no smooth twin for the optimizer).
+    """
+    from ..errors import close_matches_hint
+    from ..model import REGISTRY
+
+    out = []
+    for e in effects:
+        if e not in REGISTRY:
+            raise ModelError(f"effect {e!r} is not a component: {close_matches_hint(e, REGISTRY)}")
+        comp = REGISTRY[e]
+        if comp.modes or comp.replaces:
+            raise ModelError(f"effect {e!r} cannot be added to the ramp optimization: it "
+                             + ("has modes and no smooth twin" if comp.modes else f"replaces {comp.replaces}")
+                             + "; the mode-free effects can (second_motor, speed_sensor_lag, kiln_unbalance, "
+                               "viscous_drag)")
+        if e not in out:
+            out.append(e)
+    return tuple(out)
+
+
+def _with(core, effects):
+    from ..model import ORDER
+
+    names = list(core) + [e for e in effects if e not in core]
+    return tuple(sorted(names, key=lambda c: ORDER.index(c) if c in ORDER else ORDER.index(c.rsplit("_smooth", 1)[0])
+                        if c.endswith("_smooth") and c.rsplit("_smooth", 1)[0] in ORDER else len(ORDER)))
+
+
+def smooth_components(profile: Profile, effects=()) -> tuple[str, ...]:
     """Component list of the smooth optimization model for a profile family.
 
     Parameters
     ----------
     profile : Profile
+    effects : sequence of str
+        Mode-free effects to add (see :func:`check_effects`).
 
     Returns
     -------
     tuple of str
         ``ramp``, the profile's smooth reference component, then the smooth
-        micro model without the drive limits.
+        micro model without the drive limits, with the effects.
     """
-    return ("ramp", profile.smooth_component) + _SMOOTH_CORE
+    return ("ramp", profile.smooth_component) + _with(_SMOOTH_CORE, check_effects(effects))
 
 
-def hybrid_components(profile: Profile) -> tuple[str, ...]:
+def hybrid_components(profile: Profile, effects=()) -> tuple[str, ...]:
     """Component list of the exact hybrid micro model driven by a profile.
 
     Parameters
     ----------
     profile : Profile
+    effects : sequence of str
+        Mode-free effects to add (see :func:`check_effects`).
 
     Returns
     -------
     tuple of str
-        The paper's micro model; for a shaped profile its exact reference
-        component follows ``ramp``.
+        The paper's micro model with the effects; for a shaped profile its
+        exact reference component follows ``ramp``.
     """
     extra = (profile.exact_component,) if profile.exact_component else ()
-    return ("ramp",) + extra + _HYBRID_CORE
+    return ("ramp",) + extra + _with(_HYBRID_CORE, check_effects(effects))
 
 
 def load_stress(T_f, omega_kiln, p, tanh=np.tanh, fabs=np.abs):
@@ -120,6 +167,8 @@ class SmoothStartup:
         Only the string options are used (they select the structure).
     rtol, atol : float
         CVODES tolerances (atol on states scaled to order one).
+    effects : sequence of str
+        Mode-free effects added to the model (:func:`check_effects`).
 
     Attributes
     ----------
@@ -131,10 +180,10 @@ class SmoothStartup:
         (xs, t, P) -> the :data:`OUTPUTS` rows.
     """
 
-    def __init__(self, profile: Profile, params: Parameters, rtol: float = 1e-8, atol: float = 1e-8):
+    def __init__(self, profile: Profile, params: Parameters, rtol: float = 1e-8, atol: float = 1e-8, effects=()):
         self.profile = profile
         self.options = {k: params[k] for k in OPTION_NAMES}
-        self.plant = Plant(smooth_components(profile), self.options, compile=False)
+        self.plant = Plant(smooth_components(profile, effects), self.options, compile=False)
         if [c.name for c in self.plant.moded] != ["ramp"]:
             raise ModelError("the smooth start-up model must have no modes besides the ramp's")
         e, xs, t, sp = self.plant.equations(("rising",))  # the ramp's mode is overridden by the profile

@@ -332,6 +332,11 @@ class RampProblem:
         the ``constant`` rate, the S-curve's acceleration.  Default: the
         profile's own bound (2000 rpm/s).  Use it to forbid a ramp that creeps
         and then jumps (the optimum may do that: the result's notes say so).
+    effects : sequence of str, default ()
+        Mode-free effects on the micro model, in the smooth model and the
+        hybrid verification alike (a structure a diagnosis learned:
+        ``second_motor``, ``speed_sensor_lag``, ``kiln_unbalance``,
+        ``viscous_drag``).
 
     Raises
     ------
@@ -348,11 +353,15 @@ class RampProblem:
     scenarios: tuple = ()
     include_nominal: bool = True
     max_rate: float | None = None
+    effects: tuple = ()
 
     def __post_init__(self):
         if not isinstance(self.params, Parameters):
             raise ParameterError(f"params must be a kilnctl.Parameters, not {type(self.params).__name__}")
         self.profile = Profile.parse(self.profile)
+        from .model import check_effects
+
+        self.effects = check_effects(self.effects)
         self.t_max = _positive("t_max", self.t_max)
         self.horizon = self.t_max + SETTLE_MARGIN_S if self.horizon is None else _positive("horizon", self.horizon)
         if self.horizon < self.t_max:

@@ -115,5 +115,5 @@ def price_of_robustness(problem: RampProblem, **solve_options) -> RobustnessPric
     on_cases = {}
     for name, cp in problem.cases():
         on_cases[name], _ = measure_hybrid(resolve_gains(cp), problem.profile, nominal.values, problem.horizon,
-                                           problem.speed_fraction)
+                                           problem.speed_fraction, effects=problem.effects)
     return RobustnessPrice(nominal, robust, on_cases)

@@ -279,7 +279,7 @@ def optimize_ramp(problem: RampProblem, *, transcription: str = "single_shooting
     prof = problem.profile
     cases = _resolved_cases(problem)
     _infeasibility_precheck(problem, cases)
-    model = SmoothStartup(prof, cases[0][1], rtol=rtol, atol=atol)
+    model = SmoothStartup(prof, cases[0][1], rtol=rtol, atol=atol, effects=problem.effects)
     grid = TimeGrid.make(problem.t_max, problem.horizon, dt)
     lb, ub = problem.bounds()
     theta0 = np.clip(prof.guess(problem.params.omega_ref, problem.t_max, problem.speed_fraction)
@@ -349,9 +349,10 @@ def _verify(result: RampResult, cases, smooth_runs) -> None:
     responses, base_responses = {}, {}
     for name, cp in cases:
         result.verified[name], responses[name] = measure_hybrid(cp, prob.profile, result.values, prob.horizon,
-                                                                prob.speed_fraction)
+                                                                prob.speed_fraction, effects=prob.effects)
         result.baseline[name], base_responses[name] = measure_hybrid(cp, base_profile, [prob.params.ramp_rate],
-                                                                     prob.horizon, prob.speed_fraction)
+                                                                     prob.horizon, prob.speed_fraction,
+                                                                     effects=prob.effects)
     result.verify_seconds = time.perf_counter() - t0
     worst = result.worst_verified[0]
     result.traces = {"smooth": smooth_runs[worst], "hybrid": responses[worst], "baseline": base_responses[worst],

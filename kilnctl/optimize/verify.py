@@ -146,7 +146,7 @@ def measure_arrays(t, sigma, sigma_dyn, i_a, e_a, speed_rpm, target_rpm, limit_e
 
 
 def measure_hybrid(params: Parameters, profile: Profile, values, horizon: float, speed_fraction: float = 0.95,
-                   dt: float = 1e-3):
+                   dt: float = 1e-3, effects=()):
     """Simulate a profile on the exact hybrid micro model and measure the start-up.
 
     Parameters
@@ -163,6 +163,8 @@ def measure_hybrid(params: Parameters, profile: Profile, values, horizon: float,
         Fraction of omega_ref for ``time_to_speed_s``.
     dt : float, default 1e-3
         Output step [s] (the peak is read on it).
+    effects : sequence of str
+        Mode-free effects added to the micro model.
 
     Returns
     -------
@@ -179,12 +181,12 @@ def measure_hybrid(params: Parameters, profile: Profile, values, horizon: float,
         p = params.replace(ramp_rate=profile.equivalent_rate(values, params.omega_ref))
         initial = dict(zip(profile.names, values))
     try:
-        r = simulate(p, components=hybrid_components(profile), t_end=float(horizon), dt=dt, initial=initial)
+        r = simulate(p, components=hybrid_components(profile, effects), t_end=float(horizon), dt=dt, initial=initial)
         engine = "auto"
     except EventStormError:
         # seen with zero backlash and a reference that starts with zero slope: the compiled stepper chatters
         # between contact and gap at t ~ 1 ms; the CVODES engine (guards sampled every dt) runs it
-        r = simulate(p, components=hybrid_components(profile), t_end=float(horizon), dt=dt, initial=initial,
+        r = simulate(p, components=hybrid_components(profile, effects), t_end=float(horizon), dt=dt, initial=initial,
                      method="cvodes")
         engine = "cvodes (the default engine stopped on an event storm)"
     sig = r.outputs["sigma"]
