@@ -30,7 +30,6 @@ from ..units import RPM_PER_RAD_S
 from .base import Component, Guard, register
 
 
-
 @register
 class Ramp(Component):
     """Ramp generator of the speed reference.
@@ -207,8 +206,8 @@ class CurrentLimit(Component):
             e.sig["current_limited"] = 1
             if mode.startswith("slide"):
                 # the voltage limit's freeze (integrate = 0) still wins
-                self._u = e.equivalent_control(self.name)
-                e.sig["integrate"] = e.sig.get("integrate", ca.SX(1)) * self._u
+                u = e.sig["u_current_limit"] = e.equivalent_control(self.name)
+                e.sig["integrate"] = e.sig.get("integrate", ca.SX(1)) * u
             else:
                 e.sig["integrate"] = ca.SX(0)
 
@@ -227,7 +226,8 @@ class CurrentLimit(Component):
         e.projection["x_a"] = sign * p.I_max - p.k_D / p.L_a * e.sig["e_f"]
         if mode.startswith("slide"):
             held = "upper" if sign > 0 else "lower"
-            e.hold_constant(self._u, sign * v_free / p.V_max, below=held, above="free", component=self.name)
+            e.hold_constant(e.sig["u_current_limit"], sign * v_free / p.V_max, below=held, above="free",
+                            component=self.name)
             return
         # released into the sliding mode, which hands over to free running at once unless running the
         # integrator would push the current straight back to the limit (then it slides along it)
