@@ -147,8 +147,9 @@ class _Engine:
         g, sel, gdot = mf.guard(xs, t, self.P)
         return np.asarray(g).ravel(), np.asarray(sel).ravel(), np.asarray(gdot).ravel()
 
-    def violated(self, mf, xs, t, tol=1e-10):
-        """Index of the first guard the mode is already outside of at (xs, t), or None.
+    @staticmethod
+    def first_violated(evaluated, tol=1e-10):
+        """Index of the first violated guard of evaluated guards ``(g, sel, gdot)`` (None: no guards), or None.
 
         A guard is violated when it is below -GUARD_EPS, or when it is on its
         boundary (within ``tol``) and falling fast enough to pass -GUARD_EPS
@@ -158,20 +159,19 @@ class _Engine:
         the guard really crosses; judging such a sign at the instant made
         the current limit alternate with free running without time passing.
         """
-        if not mf.guards:
+        if evaluated is None:
             return None
-        g, _, gdot = self.guards(mf, xs, t)
+        g, _, gdot = evaluated
         for j in range(len(g)):
             if g[j] < -GUARD_EPS or (g[j] <= tol and gdot[j] * GUARD_LOOKAHEAD < -GUARD_EPS):
                 return j
         return None
 
-    def apply(self, mode, mf, j, xs, t):
-        """Mode after guard j of mode fires at (xs, t)."""
+    def apply(self, mode, mf, j, sel):
+        """Mode after guard j of mode fires, with the guards' selectors ``sel`` at that point."""
         gd = mf.guards[j]
         target = gd.target
         if gd.alt_target is not None:
-            _, sel, _ = self.guards(mf, xs, t)
             target = gd.target if sel[j] >= 0 else gd.alt_target
         names = [c.name for c in self.plant.moded]
         i = names.index(gd.component)
@@ -189,12 +189,13 @@ class _Engine:
         visited = [mode]
         tried_sliding = set()
         mf = plant.functions(mode)
-        j = first if first is not None else self.violated(mf, xs, t)
+        ev = self.guards(mf, xs, t) if mf.guards else None  # guards, selectors and rates: once per mode
+        j = first if first is not None else self.first_violated(ev)
         for _hop in range(32):
             if j is None:
                 return mode, xs, switched
-            rate = float(self.guards(mf, xs, t)[2][j])
-            new, gd, i = self.apply(mode, mf, j, xs, t)
+            rate = float(ev[2][j])
+            new, gd, i = self.apply(mode, mf, j, ev[1])
             if new in visited:
                 comp = plant.moded[i]
                 start = visited.index(new)
@@ -214,7 +215,8 @@ class _Engine:
             mf = plant.functions(mode)
             xs = (mf.stepper.project(self.P, xs, t) if mf.stepper is not None
                   else np.asarray(mf.project(xs, t, self.P)).ravel())
-            j = self.violated(mf, xs, t)
+            ev = self.guards(mf, xs, t) if mf.guards else None
+            j = self.first_violated(ev)
         raise EventStormError(f"more than 32 mode switches at t = {t:.6g} s without time passing "
                               f"(last: {switched[-1][1]} -> {switched[-1][2]})")
 

@@ -85,3 +85,59 @@ def check_report_dir(args) -> None:
     if rep.exists() and not rep.is_dir():
         raise ConfigFileError(f"--report {rep} is a file, not a folder: give a folder (created if missing) for "
                               "the report files (HTML, JSON, figures)")
+
+
+def learned_structure_args(args, params: Parameters, model: str | None):
+    """The structure ``--model-from DIAGNOSE.json`` and ``--effects A,B`` describe, with the gains of ``params``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        Parsed arguments with ``model_from`` and ``effects``.
+    params : Parameters
+        The setup (``--config``); its gains (given, or designed) are kept on the learned structure.
+    model : str or None
+        Base model; None: the diagnosis' model, else macro.
+
+    Returns
+    -------
+    components : tuple of str or None
+        None when neither option is given.
+    params : Parameters
+        With the diagnosis' calibrated values and the effects' options, gains resolved.
+    added : list of str
+        Components added to the base model.
+    selected : list of str
+        The effects named (the diagnosis' selection, then ``--effects``).
+    """
+    if not (getattr(args, "effects", None) or getattr(args, "model_from", None)):
+        return None, params, [], []
+    from ..measure.effects import effect_components
+    from ..model import component_names
+    from ..simulate import resolve_gains
+
+    params = resolve_gains(params)
+    gains = {k: params[k] for k in ("k_p", "k_I", "k_D")}
+    selected: list[str] = []
+    comps = None
+    if args.model_from:
+        from ..design.learned import learned_structure
+
+        comps, params, selected = learned_structure(args.model_from, model=model, base=params)
+        params = params.replace(gains="given", **gains)
+    model = model or _model_of(comps) or "macro"
+    base = component_names(model)
+    added = [c for c in (comps or ()) if c not in base]
+    if args.effects:
+        names = [e.strip() for e in args.effects.split(",") if e.strip()]
+        extra, params = effect_components(names, params, model)
+        added += [c for c in extra if c not in added]
+        selected += names
+    return component_names(model, added), params, added, selected
+
+
+def _model_of(components) -> str | None:
+    """The base model a component list was built on (micro when it has a mesh)."""
+    if components is None:
+        return None
+    return "micro" if "mesh" in components else "macro"

@@ -108,7 +108,10 @@ def run(args) -> int:
     else:
         print(result.summary())
         if learned is not None:
-            print(f"\nLearned structure: the macro model with {', '.join(learned[1]) or 'no effect added'}"
+            from .common import _model_of
+
+            print(f"\nLearned structure: the {_model_of(learned[0])} model with "
+                  f"{', '.join(learned[1]) or 'no effect added'}"
                   + (f" (from {args.model_from})" if args.model_from else ""))
             print(learned[2].summary())
         if args.plot:
@@ -118,26 +121,13 @@ def run(args) -> int:
 
 def _learned(args, params, result, req):
     """The rigid design checked and retuned on --effects / --model-from, or None."""
-    if not (args.effects or args.model_from):
-        return None
-    from ..design.learned import learned_structure, retune
+    from ..design.learned import retune
     from ..gains import PIDGains
-    from ..measure.effects import effect_components
-    from ..model import component_names
+    from .common import learned_structure_args
 
-    if args.model_from:
-        comps, lp, selected = learned_structure(args.model_from, base=params)
-    else:
-        lp, selected = params, []
-    if args.effects:
-        names = [e.strip() for e in args.effects.split(",") if e.strip()]
-        extra, lp = effect_components(names, lp, "macro")
-        base = comps if args.model_from else component_names("macro")
-        comps = tuple(dict.fromkeys(list(base) + [c for c in extra if c not in base]))
-        from ..model import ORDER
-
-        comps = tuple(sorted(comps, key=lambda c: ORDER.index(c) if c in ORDER else len(ORDER)))
-        selected = selected + names
+    comps, lp, _, selected = learned_structure_args(args, params, None)
+    if comps is None:
+        return None
     g = result.gains
     lp = lp.replace(gains="given", k_p=g.k_p, k_I=g.k_I, k_D=g.k_D)
     return comps, selected, retune(lp, comps, PIDGains(g.k_p, g.k_I, g.k_D), req)

@@ -18,7 +18,7 @@ from pathlib import Path
 
 from ..errors import ConfigFileError
 from . import print_json
-from .common import add_config_arg, load_params
+from .common import add_config_arg, learned_structure_args, load_params
 
 #: exit code of a result that the hybrid verification flagged
 EXIT_FLAGGED = 3
@@ -106,14 +106,7 @@ def run(args) -> int:
 
     _check_plot(args)
     params = load_params(args)
-    effects = [e.strip() for e in (args.effects or "").split(",") if e.strip()]
-    if args.model_from:
-        from ..design.learned import learned_structure
-
-        comps, params, _ = learned_structure(args.model_from, model="micro", base=params)
-        from ..model import component_names
-
-        effects += [c for c in comps if c not in component_names("micro") and c not in effects]
+    _, params, effects, _ = learned_structure_args(args, params, "micro")
     problem = RampProblem(params, profile=args.profile, t_max=args.t_max, horizon=args.horizon,
                           objective=args.objective, scenarios=default_scenarios() if args.robust else (),
                           max_rate=args.max_rate, effects=tuple(effects))

@@ -6,7 +6,7 @@ from pathlib import Path
 
 from ..errors import ConfigFileError
 from . import print_json
-from .common import add_config_arg, load_params
+from .common import add_config_arg, learned_structure_args, load_params
 
 
 def register(sub) -> None:
@@ -46,25 +46,7 @@ def run(args) -> int:
     if args.plot and args.config and Path(args.plot).resolve() == Path(args.config).resolve():
         raise ConfigFileError(f"--plot {args.plot} is the --config file: refusing to overwrite it")
     params = load_params(args)
-    components = None
-    if args.model_from or args.effects:
-        from ..measure.effects import effect_components
-        from ..model import component_names
-        from ..simulate import resolve_gains
-
-        params = resolve_gains(params)  # the gains of the config or the rigid design, kept on the learned plant
-        gains = {k: params[k] for k in ("k_p", "k_I", "k_D")}
-        base, selected = component_names(args.model), []
-        if args.model_from:
-            from ..design.learned import learned_structure
-
-            base, params, selected = learned_structure(args.model_from, model=args.model, base=params)
-            params = params.replace(gains="given", **gains)
-        if args.effects:
-            names = [e.strip() for e in args.effects.split(",") if e.strip()]
-            extra, params = effect_components(names, params, args.model)
-            base = component_names(args.model, [c for c in base if c not in component_names(args.model)] + list(extra))
-        components = base
+    components, params, _, _ = learned_structure_args(args, params, args.model)
     v = verify(params, model=args.model, t_end=args.t_end, components=components)
     if args.plot:
         save_figure(v.plot(), args.plot)

@@ -82,8 +82,6 @@ def _setup_toml(params: Parameters) -> str:
     base = Parameters()
     lines = []
     for k, v in params.as_dict().items():
-        if k in ("gains",) and v == base[k]:
-            continue
         if v != base[k]:
             lines.append(f"{k} = {v!r}" if not isinstance(v, str) else f'{k} = "{v}"')
     return "\n".join(lines) if lines else "# (all defaults)"
@@ -133,6 +131,6 @@ def confirm_worst(study, result, output: str | None = None, rtol: float = 1e-10)
     agree = ref is not None and math.isfinite(ref) and abs(value - ref) <= AGREEMENT * abs(ref)
     variables = {v: (float(ok.at[idx, v]) if not isinstance(ok.at[idx, v], str) else ok.at[idx, v])
                  for v in result.variables}
-    eff = "".join(f" --effects {','.join(study.effects)}" for _ in [0] if study.effects)
+    eff = f" --effects {','.join(study.effects)}" if study.effects else ""
     command = f"kilnctl simulate --model {study.model} --t-end {study.t_end:g}{eff} --config worst.toml --json"
     return WorstPoint(output, idx, variables, value, ref, agree, _setup_toml(params), command, err)
