@@ -60,8 +60,12 @@ def test_wheel_and_sdist_carry_the_data_the_c_source_and_one_version(dist):
     assert f"\nVersion: {VERSION}\n" in meta  # the version of kilnctl/__init__.py, the one place it is written
     entry = zipfile.ZipFile(wheel).read(f"kilnctl-{VERSION}.dist-info/entry_points.txt").decode()
     assert "kilnctl = kilnctl.cli:main" in entry
+    # PEP 639: the licence is named by its SPDX expression and its text travels in both distributions
+    assert "\nLicense-Expression: BSD-3-Clause\n" in meta and "\nLicense-File: LICENSE\n" in meta
+    assert f"kilnctl-{VERSION}.dist-info/licenses/LICENSE" in names
     members = {m.split("/", 1)[1] for m in tarfile.open(sdist).getnames() if "/" in m}
-    assert set(DATA) | {"pyproject.toml", "README.md", "CHANGELOG.md", "Makefile", "tests/test_package.py"} <= members
+    assert set(DATA) | {"pyproject.toml", "README.md", "CHANGELOG.md", "LICENSE", "Makefile",
+                         "tests/test_package.py"} <= members
 
 
 def test_the_wheel_runs_design_and_a_diagnosis_outside_the_repository(dist, tmp_path):
