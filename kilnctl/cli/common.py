@@ -7,28 +7,80 @@ import sys
 from ..params import Parameters, check_plausible
 
 
+#: options several subcommands share: name -> (flag, ``add_argument`` keywords); a subcommand may give its own
+#: help or keywords (see :func:`add_options`)
+SHARED_OPTIONS = {
+    "data": ("--data", {"required": True, "metavar": "FILE", "help": "measured record: CSV, .xlsx, .parquet or "
+                        ".mat with time_s, current_A, speed_rpm [, speed_ref_rpm] (docs/measurements.md)"}),
+    "columns": ("--columns", {"metavar": "MAP", "help": "the record's own column names, e.g. "
+                              "current_A=I_arm,speed_rpm=n_mot,time_s=t; units in the header or here ('time_s=t "
+                              "[ms]') are converted (default: the setup's [measurement] columns)"}),
+    "config": ("--config", {"metavar": "FILE", "help": "TOML parameter file (defaults: the paper's Table 1)"}),
+    "strict": ("--strict", {"action": "store_true", "help": "refuse parameter values that are valid but almost "
+                            "surely a unit slip (a backlash in mm given as m, a friction coefficient in percent, "
+                            "a mass in tonnes); without it they are warnings"}),
+    "model": ("--model", {"choices": ("macro", "micro"), "default": "macro"}),
+    "effects": ("--effects", {"metavar": "A,B"}),
+    "model_from": ("--model-from", {"metavar": "DIAGNOSE.json"}),
+    "plot": ("--plot", {"metavar": "FILE", "help": "write the comparison figure (format from the extension)"}),
+    "report": ("--report", {"metavar": "DIR"}),
+    "dry_run": ("--dry-run", {"action": "store_true"}),
+    "json": ("--json", {"action": "store_true", "help": "print JSON instead of a table"}),
+    "quiet": ("--quiet", {"action": "store_true", "help": "no progress lines on stderr"}),
+}
+
+
+def add_command(sub, name: str, run, *, help: str, description: str):  # noqa: A002 - argparse's own keyword
+    """Add a subcommand whose parsed arguments go to ``run``; return its parser.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The subparsers of the ``kilnctl`` parser.
+    name : str
+        Subcommand name.
+    run : callable
+        Takes the parsed arguments, returns the exit code.
+    help : str
+        One line for ``kilnctl --help``.
+    description : str
+        What the subcommand does, for ``kilnctl NAME --help``.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+    """
+    parser = sub.add_parser(name, help=help, description=description)
+    parser.set_defaults(func=run)
+    return parser
+
+
+def add_options(parser, **options) -> None:
+    """Add options of :data:`SHARED_OPTIONS` to a subcommand parser, in the order given.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The subcommand's parser.
+    **options : bool, str or dict
+        Option name (``model_from`` for ``--model-from``) -> ``True`` for the shared help, the
+        subcommand's own help text, or a dict of ``add_argument`` keywords that replace the shared ones.
+    """
+    for name, given in options.items():
+        flag, keywords = SHARED_OPTIONS[name]
+        if isinstance(given, str):
+            given = {"help": given}
+        parser.add_argument(flag, **{**keywords, **(given if isinstance(given, dict) else {})})
+
+
 def add_config_arg(parser) -> None:
-    """Add the ``--config FILE`` option to a subcommand parser.
+    """Add ``--config FILE`` (the shared help) and ``--strict`` to a subcommand parser.
 
     Parameters
     ----------
     parser : argparse.ArgumentParser
     """
-    parser.add_argument("--config", metavar="FILE", help="TOML parameter file (defaults: the paper's Table 1)")
-    add_strict_arg(parser)
-
-
-def add_strict_arg(parser) -> None:
-    """Add the ``--strict`` option: implausible parameter values are errors, not warnings.
-
-    Parameters
-    ----------
-    parser : argparse.ArgumentParser
-    """
-    parser.add_argument("--strict", action="store_true",
-                        help="refuse parameter values that are valid but almost surely a unit slip (a backlash "
-                             "in mm given as m, a friction coefficient in percent, a mass in tonnes); without "
-                             "it they are warnings")
+    add_options(parser, config=True, strict=True)
 
 
 def warn_implausible(params: Parameters, args, where: str = "") -> None:
@@ -85,6 +137,28 @@ def check_report_dir(args) -> None:
     if rep.exists() and not rep.is_dir():
         raise ConfigFileError(f"--report {rep} is a file, not a folder: give a folder (created if missing) for "
                               "the report files (HTML, JSON, figures)")
+
+
+def load_experiment_setup(args):
+    """Refuse a bad ``--report`` folder before any work, then load the ``--config`` setup, warning of implausible values.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        Parsed arguments with ``report``, ``data``, ``config`` and ``strict``.
+
+    Returns
+    -------
+    kilnctl.measure.io.Setup
+        The parameters and the ``[measurement]`` options of the experiment.
+    """
+    from ..measure.io import load_setup
+
+    if args.report:
+        check_report_dir(args)
+    setup = load_setup(args.config)
+    warn_implausible(setup.params, args, where=args.config or "")
+    return setup
 
 
 def learned_structure_args(args, params: Parameters, model: str | None):

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from ..errors import ConfigFileError
 from . import print_json
-from .common import add_strict_arg, check_report_dir, warn_implausible
+from .common import add_command, add_options, load_experiment_setup
 
 __all__ = ["register", "run"]
 
@@ -23,25 +23,20 @@ def register(sub) -> None:
     sub : argparse._SubParsersAction
         The subparsers of the ``kilnctl`` parser.
     """
-    p = sub.add_parser(
-        "compare", help="compare the model with a measured start-up: fit %%, residual tests, where it fails",
+    p = add_command(
+        sub, "compare", run,
+        help="compare the model with a measured start-up: fit %%, residual tests, where it fails",
         description="Simulate the experiment of a measured record (docs/measurements.md) and compare: fit % "
                     "per channel as MATLAB's compare defines it, residual whiteness and cross-correlation with "
                     "99 % bands, residual spectrum, and the intervals where |residual| > 3 sigma.")
-    p.add_argument("--data", required=True, metavar="FILE", help="measured record: CSV, .xlsx, .parquet or .mat "
-                   "with time_s, current_A, speed_rpm [, speed_ref_rpm] (docs/measurements.md)")
-    p.add_argument("--columns", metavar="MAP", help="the record's own column names, e.g. "
-                   "current_A=I_arm,speed_rpm=n_mot,time_s=t; units in the header or here ('time_s=t [ms]') are "
-                   "converted (default: the setup's [measurement] columns)")
-    add_strict_arg(p)
-    p.add_argument("--config", metavar="FILE", help="setup of the experiment (kilnctl TOML parameter file, "
-                   "optional [measurement] section); default: the paper's Table 1")
-    p.add_argument("--model", choices=("macro", "micro"), default="macro", help="model to compare (default macro)")
-    p.add_argument("--effects", default="", metavar="A,B", help="comma-separated effects to add, "
-                   "e.g. second_motor,speed_sensor_lag (see kilnctl.measure.CATALOGUE)")
-    p.add_argument("--report", metavar="DIR", help="write compare.html, compare.json and compare.png into DIR")
-    p.add_argument("--json", action="store_true", help="print the comparison as JSON")
-    p.set_defaults(func=run)
+    add_options(p, data=True, columns=True, strict=True,
+                config="setup of the experiment (kilnctl TOML parameter file, optional [measurement] section); "
+                       "default: the paper's Table 1",
+                model="model to compare (default macro)",
+                effects={"default": "", "help": "comma-separated effects to add, e.g. second_motor,"
+                         "speed_sensor_lag (see kilnctl.measure.CATALOGUE)"},
+                report="write compare.html, compare.json and compare.png into DIR",
+                json="print the comparison as JSON")
 
 
 def parse_names(text: str, flag: str = "--effects") -> tuple[str, ...]:
@@ -80,13 +75,10 @@ def run(args) -> int:
         0 on success.
     """
     from ..measure.effects import effect_components
-    from ..measure.io import load_setup, read_record, record_columns
+    from ..measure.io import read_record, record_columns
     from ..measure.compare import compare
 
-    if args.report:
-        check_report_dir(args)
-    setup = load_setup(args.config)
-    warn_implausible(setup.params, args, where=args.config or "")
+    setup = load_experiment_setup(args)  # a bad --report is refused before the work
     names = parse_names(args.effects)
     effects, params = effect_components(names, setup.params, model=args.model)
     data = read_record(args.data, setup.params, record_columns(setup, args.columns))

@@ -11,7 +11,7 @@ from pathlib import Path
 
 from ..errors import ConfigFileError
 from . import print_json
-from .common import add_config_arg, load_params
+from .common import add_command, add_config_arg, add_options, load_params
 
 
 def register(sub) -> None:
@@ -22,8 +22,8 @@ def register(sub) -> None:
     sub : argparse._SubParsersAction
         The subparsers of the ``kilnctl`` parser.
     """
-    p = sub.add_parser(
-        "design", help="design the PID speed-loop gains by root locus (stick and slip)",
+    p = add_command(
+        sub, "design", run, help="design the PID speed-loop gains by root locus (stick and slip)",
         description="Design k_p, k_I, k_D of the paper's PID speed controller (eq. 21) by root locus so that "
                     "the requirements hold with the burden sticking and slipping. Requirements not given keep "
                     "their defaults (docs/tutorial_design.md). The config's 'gains' option is ignored: this "
@@ -38,16 +38,12 @@ def register(sub) -> None:
     p.add_argument("--wn-max", type=float, metavar="W",
                    help="maximum natural frequency of the dominant pole [rad/s] (default: half the drive-train "
                         "torsional mode sqrt(k_po/J_e), 4.5 rad/s with Table 1)")
-    p.add_argument("--effects", metavar="A,B",
-                   help="also check (and retune) the gains on the macro model with these effects added, e.g. "
-                        "speed_sensor_lag,second_motor (names as in 'kilnctl diagnose')")
-    p.add_argument("--model-from", metavar="DIAGNOSE.json",
-                   help="also check (and retune) the gains on the structure and calibrated values a diagnosis "
-                        "learned ('kilnctl diagnose --json' output saved to a file)")
-    p.add_argument("--plot", metavar="FILE",
-                   help="write the root locus and step responses (format from the extension: png, pdf, svg ...)")
-    p.add_argument("--json", action="store_true", help="print JSON instead of a table")
-    p.set_defaults(func=run)
+    add_options(p, effects="also check (and retune) the gains on the macro model with these effects added, e.g. "
+                           "speed_sensor_lag,second_motor (names as in 'kilnctl diagnose')",
+                model_from="also check (and retune) the gains on the structure and calibrated values a diagnosis "
+                           "learned ('kilnctl diagnose --json' output saved to a file)",
+                plot="write the root locus and step responses (format from the extension: png, pdf, svg ...)",
+                json=True)
 
 
 def _check_plot_path(args) -> None:

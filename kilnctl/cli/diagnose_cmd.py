@@ -13,7 +13,7 @@ import os
 import sys
 
 from . import print_json
-from .common import add_strict_arg, check_report_dir, warn_implausible
+from .common import add_command, add_options, load_experiment_setup
 from .compare_cmd import parse_names
 
 __all__ = ["register", "run"]
@@ -39,22 +39,17 @@ def register(sub) -> None:
     sub : argparse._SubParsersAction
         The subparsers of the ``kilnctl`` parser.
     """
-    p = sub.add_parser(
-        "diagnose", help="find the physical effect the model is missing, from a measured start-up",
+    from ..measure.effects import DEFAULT_CALIBRATE
+
+    p = add_command(
+        sub, "diagnose", run, help="find the physical effect the model is missing, from a measured start-up",
         description="Calibrate the base model on a measured record, refit it with each effect of the catalogue, "
                     "and keep the effects supported by both BIC and a held-out part of the record (greedy). "
                     "See docs/tutorial_diagnose.md.")
-    p.add_argument("--data", required=True, metavar="FILE", help="measured record: CSV, .xlsx, .parquet or .mat "
-                   "with time_s, current_A, speed_rpm [, speed_ref_rpm] (docs/measurements.md)")
-    p.add_argument("--columns", metavar="MAP", help="the record's own column names, e.g. "
-                   "current_A=I_arm,speed_rpm=n_mot,time_s=t; units in the header or here ('time_s=t [ms]') are "
-                   "converted (default: the setup's [measurement] columns)")
-    add_strict_arg(p)
-    p.add_argument("--config", metavar="FILE", help="setup of the experiment (kilnctl TOML parameter file with an "
-                   "optional [measurement] section); default: the paper's Table 1")
-    p.add_argument("--model", choices=("macro", "micro"), default="macro", help="base model (default macro)")
-    from ..measure.effects import DEFAULT_CALIBRATE
-
+    add_options(p, data=True, columns=True, strict=True,
+                config="setup of the experiment (kilnctl TOML parameter file with an optional [measurement] "
+                       "section); default: the paper's Table 1",
+                model="base model (default macro)")
     p.add_argument("--calibrate", default=None, metavar="A,B",
                    help="base parameters to calibrate (default: the setup's [measurement] calibrate, else "
                         + ",".join(DEFAULT_CALIBRATE) + ")")
@@ -64,10 +59,8 @@ def register(sub) -> None:
     p.add_argument("--candidates", default=None, metavar="A,B", help="catalogue effects to try (default: all)")
     p.add_argument("--holdout", choices=("blocks", "tail"), default="blocks",
                    help="held-out part: interleaved blocks (default) or the last 30 %% of the record")
-    p.add_argument("--report", metavar="DIR", help="write diagnose.html, diagnose.json and figures into DIR")
-    p.add_argument("--json", action="store_true", help="print the diagnosis as JSON")
-    p.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
-    p.set_defaults(func=run)
+    add_options(p, report="write diagnose.html, diagnose.json and figures into DIR",
+                json="print the diagnosis as JSON", quiet=True)
 
 
 def run(args) -> int:
@@ -84,12 +77,9 @@ def run(args) -> int:
         0 on success.
     """
     from ..measure.diagnose import DEFAULT_CALIBRATE, Diagnosis
-    from ..measure.io import load_setup, read_record, record_columns
+    from ..measure.io import read_record, record_columns
 
-    if args.report:
-        check_report_dir(args)  # before the diagnosis, which takes tens of seconds
-    setup = load_setup(args.config)
-    warn_implausible(setup.params, args, where=args.config or "")
+    setup = load_experiment_setup(args)  # a bad --report is refused before the work
     calibrate = (parse_names(args.calibrate, "--calibrate") if args.calibrate
                  else tuple(setup.options.get("calibrate", DEFAULT_CALIBRATE)))
     candidates = (parse_names(args.candidates, "--candidates") if args.candidates

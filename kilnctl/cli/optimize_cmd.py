@@ -18,7 +18,7 @@ from pathlib import Path
 
 from ..errors import ConfigFileError
 from . import print_json
-from .common import add_config_arg, learned_structure_args, load_params
+from .common import add_command, add_config_arg, add_options, learned_structure_args, load_params
 
 #: exit code of a result that the hybrid verification flagged
 EXIT_FLAGGED = 3
@@ -34,8 +34,9 @@ def register(sub) -> None:
     """
     from ..optimize import OBJECTIVES
 
-    p = sub.add_parser(
-        "optimize-ramp", help="optimize the start-up ramp for least gear stress (verified on the hybrid plant)",
+    p = add_command(
+        sub, "optimize-ramp", run,
+        help="optimize the start-up ramp for least gear stress (verified on the hybrid plant)",
         description="Find the speed-reference ramp that gives the least girth-gear bending stress during the "
                     "start-up while the motor still reaches 95 % of its set point by --t-max, with the armature "
                     "current and voltage within the drive's limits; verify it on the exact hybrid plant.")
@@ -55,21 +56,16 @@ def register(sub) -> None:
                         "and report the price of robustness")
     p.add_argument("--transcription", choices=("single_shooting", "multiple_shooting"), default="single_shooting",
                    help="how the dynamics enter the NLP (default single_shooting)")
-    p.add_argument("--plot", metavar="FILE", help="write the comparison figure (format from the extension)")
-    p.add_argument("--report", metavar="DIR", help="write optimize_ramp.html (one page, figure embedded), "
-                   "optimize_ramp.json and optimize_ramp.png into DIR")
+    add_options(p, plot=True, report="write optimize_ramp.html (one page, figure embedded), optimize_ramp.json "
+                                     "and optimize_ramp.png into DIR")
     p.add_argument("--max-rate", type=float, default=None, metavar="RPM_S",
                    help="largest rate of the reference [rpm/s] (every pwl segment, the constant rate, the "
                         "S-curve's acceleration); default 2000. Forbids a ramp that creeps and then jumps")
-    p.add_argument("--effects", metavar="A,B",
-                   help="mode-free effects on the micro model, in the optimization and the verification "
-                        "(second_motor, speed_sensor_lag, kiln_unbalance, viscous_drag)")
-    p.add_argument("--model-from", metavar="DIAGNOSE.json",
-                   help="optimize on the effects and calibrated values a diagnosis learned ('kilnctl diagnose "
-                        "--json' output saved to a file); its effects must be mode-free")
-    p.add_argument("--json", action="store_true", help="print the result as JSON")
-    p.add_argument("--quiet", action="store_true", help="no progress lines on stderr (--json implies it)")
-    p.set_defaults(func=run)
+    add_options(p, effects="mode-free effects on the micro model, in the optimization and the verification "
+                           "(second_motor, speed_sensor_lag, kiln_unbalance, viscous_drag)",
+                model_from="optimize on the effects and calibrated values a diagnosis learned ('kilnctl diagnose "
+                           "--json' output saved to a file); its effects must be mode-free",
+                json="print the result as JSON", quiet="no progress lines on stderr (--json implies it)")
 
 
 def _check_plot(args) -> None:

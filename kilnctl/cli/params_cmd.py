@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from . import print_json
-from .common import add_config_arg, load_params
+from .common import add_command, add_config_arg, add_options, load_params
 
 
 def register(sub) -> None:
@@ -12,16 +12,16 @@ def register(sub) -> None:
     Parameters
     ----------
     sub : argparse._SubParsersAction
+        The subparsers of the ``kilnctl`` parser.
     """
-    p = sub.add_parser(
-        "params", help="print the parameter set with units and sources",
+    p = add_command(
+        sub, "params", run, help="print the parameter set with units and sources",
         description="Print every parameter of the plant and controller (the paper's Table 1, overridden by "
                     "--config) with its value, unit, source (Table 1, an equation of the paper, or an "
                     "assumption and why) and meaning; '*' marks values changed from the default. Use it to "
                     "check a configuration file before a run.")
     add_config_arg(p)
-    p.add_argument("--json", action="store_true", help="print JSON instead of a table")
-    p.set_defaults(func=run)
+    add_options(p, json=True)
 
 
 def run(args) -> int:

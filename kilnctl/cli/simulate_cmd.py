@@ -14,7 +14,7 @@ from ..errors import ConfigFileError, SimulationError
 from ..params import SPECS
 from . import print_json
 from ..figures import save_figure
-from .common import add_config_arg, load_params
+from .common import add_command, add_options, load_params
 
 #: default simulated time [s]: long enough for the paper's 15-17 s settling (Fig. 4, 5)
 DEFAULT_T_END = 40.0
@@ -28,14 +28,12 @@ def register(sub) -> None:
     sub : argparse._SubParsersAction
         The subparsers of the ``kilnctl`` parser.
     """
-    p = sub.add_parser(
-        "simulate", help="simulate a start-up on the nonlinear plant (macro or micro model)",
+    p = add_command(
+        sub, "simulate", run, help="simulate a start-up on the nonlinear plant (macro or micro model)",
         description="Simulate a kiln start-up on the paper's macro or micro model with the "
                     "designed (or configured) PID gains, and summarise it.")
-    p.add_argument("--model", choices=("macro", "micro"), default="macro",
-                   help="macro: rigid reducer (eqs. 1-21); micro: coupling, pinion, mesh with backlash "
-                        "(eqs. 26-34). Default: macro")
-    add_config_arg(p)
+    add_options(p, model="macro: rigid reducer (eqs. 1-21); micro: coupling, pinion, mesh with backlash "
+                         "(eqs. 26-34). Default: macro", config=True, strict=True)
     p.add_argument("--t-end", type=float, default=DEFAULT_T_END, metavar="S",
                    help=f"simulated time [s] (default {DEFAULT_T_END:g})")
     p.add_argument("--max-samples", type=int, default=None, metavar="N",
@@ -45,12 +43,11 @@ def register(sub) -> None:
     p.add_argument("--law", choices=SPECS["friction_law"].choices, default=None,
                    help="burden friction law: 'paper' (eq. 3 as printed) or 'torque' (torque-consistent); "
                         "default: the config's friction_law")
-    p.add_argument("--effects", default="", metavar="A,B",
-                   help="comma-separated components to add, e.g. second_motor,speed_sensor_lag")
+    add_options(p, effects={"default": "", "help": "comma-separated components to add, e.g. "
+                            "second_motor,speed_sensor_lag"})
     p.add_argument("--csv", metavar="FILE", help="write the time series (outputs and modes) as CSV")
-    p.add_argument("--plot", metavar="FILE", help="write the standard figure set (format from the extension)")
-    p.add_argument("--json", action="store_true", help="print the summary as JSON")
-    p.set_defaults(func=run)
+    add_options(p, plot="write the standard figure set (format from the extension)",
+                json="print the summary as JSON")
 
 
 def _parse_effects(text: str) -> tuple[str, ...]:

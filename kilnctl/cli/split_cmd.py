@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from ..errors import ConfigFileError
 from . import print_json
+from .common import add_command, add_options
 
 __all__ = ["register", "run"]
 
@@ -22,8 +23,8 @@ def register(sub) -> None:
     sub : argparse._SubParsersAction
         The subparsers of the ``kilnctl`` parser.
     """
-    p = sub.add_parser(
-        "split-startups", help="cut a long log (historian, trace tool) into one record per start-up",
+    p = add_command(
+        sub, "split-startups", run, help="cut a long log (historian, trace tool) into one record per start-up",
         description="Read a long log (CSV, .xlsx, .parquet or .mat; the record formats of docs/measurements.md), "
                     "find every start-up from rest by the speed reference (or, without one, by the rise of the "
                     "measured speed), and write one kilnctl record per start-up into a new or empty folder: "
@@ -31,10 +32,9 @@ def register(sub) -> None:
     p.add_argument("log", metavar="LOG", help="the long log")
     p.add_argument("--out", metavar="DIR", help="new or empty folder for startup_01.csv ... (required unless "
                    "--dry-run)")
-    p.add_argument("--config", metavar="FILE", help="setup (kilnctl TOML; omega_ref and ramp_rate set the rest and "
-                   "run levels; [measurement] columns maps the log's names); default: the paper's Table 1")
-    p.add_argument("--columns", metavar="MAP", help="the log's own column names, e.g. "
-                   "current_A=I_arm,speed_rpm=n_mot,time_s=t [ms]")
+    add_options(p, config="setup (kilnctl TOML; omega_ref and ramp_rate set the rest and run levels; [measurement] "
+                          "columns maps the log's names); default: the paper's Table 1",
+                columns="the log's own column names, e.g. current_A=I_arm,speed_rpm=n_mot,time_s=t [ms]")
     p.add_argument("--by", choices=("auto", "ref", "speed"), default="auto",
                    help="cut by the speed reference or the measured speed (default: the reference when the log "
                         "has speed_ref_rpm)")
@@ -42,9 +42,7 @@ def register(sub) -> None:
                    help="time at rest kept before each ramp [s] (default 2)")
     p.add_argument("--length", type=float, default=60.0, metavar="S",
                    help="longest record, from the ramp start [s] (default 60)")
-    p.add_argument("--dry-run", action="store_true", help="list the start-ups; write nothing")
-    p.add_argument("--json", action="store_true", help="print the start-ups as JSON")
-    p.set_defaults(func=run)
+    add_options(p, dry_run="list the start-ups; write nothing", json="print the start-ups as JSON")
 
 
 def run(args) -> int:

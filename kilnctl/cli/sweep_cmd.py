@@ -14,7 +14,7 @@ from pathlib import Path
 
 from ..errors import ConfigFileError, KilnctlError
 from . import print_json
-from .common import add_strict_arg, warn_implausible
+from .common import add_command, add_options, warn_implausible
 
 #: default folder of finished points, relative to the current folder
 DEFAULT_CACHE = Path(".kilnctl_cache") / "sweep"
@@ -28,8 +28,8 @@ def register(sub) -> None:
     sub : argparse._SubParsersAction
         The subparsers of the ``kilnctl`` parser.
     """
-    p = sub.add_parser(
-        "sweep", help="run a parametric study (grid, Latin hypercube, Monte Carlo) from a spec file",
+    p = add_command(
+        sub, "sweep", run, help="run a parametric study (grid, Latin hypercube, Monte Carlo) from a spec file",
         description="Simulate every point of the study in SPEC (TOML; format in docs/sweeps.md) in parallel, "
                     "print a summary and write the result table. Finished points are cached, so an "
                     "interrupted sweep resumes when run again.")
@@ -40,7 +40,7 @@ def register(sub) -> None:
     p.add_argument("--workers", type=int, default=None, metavar="N",
                    help="processes of the local executor (default: one per core)")
     p.add_argument("--out", metavar="FILE", help="write the result table (.csv or .json)")
-    p.add_argument("--plot", metavar="FILE", help="write the sweep figure (format from the extension)")
+    add_options(p, plot="write the sweep figure (format from the extension)")
     p.add_argument("--threshold", type=float, default=None, metavar="VALUE",
                    help="a limit on the first output, in the unit the summary prints it in (a stress in MPa, "
                         "e.g. 205.6; a current in A; a time in s): drawn in the figure, and the fraction of "
@@ -51,11 +51,8 @@ def register(sub) -> None:
     p.add_argument("--max-points", type=int, default=None, metavar="N",
                    help="largest number of points, checked before any is built (default 100000, or the "
                         "environment variable KILNCTL_MAX_POINTS)")
-    add_strict_arg(p)
-    p.add_argument("--dry-run", action="store_true", help="check the spec and list the study; simulate nothing")
-    p.add_argument("--json", action="store_true", help="print the summary as JSON")
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
-    p.set_defaults(func=run)
+    add_options(p, strict=True, dry_run="check the spec and list the study; simulate nothing",
+                json="print the summary as JSON", quiet="no progress bar")
 
 
 def _check_outputs(args) -> None:

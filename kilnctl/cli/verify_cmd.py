@@ -6,7 +6,7 @@ from pathlib import Path
 
 from ..errors import ConfigFileError
 from . import print_json
-from .common import add_config_arg, learned_structure_args, load_params
+from .common import add_command, add_config_arg, add_options, learned_structure_args, load_params
 
 
 def register(sub) -> None:
@@ -15,27 +15,23 @@ def register(sub) -> None:
     Parameters
     ----------
     sub : argparse._SubParsersAction
+        The subparsers of the ``kilnctl`` parser.
     """
-    p = sub.add_parser(
-        "verify", help="run the designed gains on the nonlinear plant and compare with the design",
+    p = add_command(
+        sub, "verify", run, help="run the designed gains on the nonlinear plant and compare with the design",
         description="Simulate the start-up ramp with the PID gains (designed by root locus, or given in "
                     "--config) on the nonlinear plant and print it beside the linear prediction of the design "
                     "(stick and slip): overshoot, settling time, lag behind the ramp, peak and final current; "
                     "then say where and why the two part (load torque, burden breakaway, drive limits, "
                     "backlash). See docs/tutorial_verify.md.")
     add_config_arg(p)
-    p.add_argument("--model", choices=("macro", "micro"), default="macro", help="nonlinear model (default macro)")
+    add_options(p, model="nonlinear model (default macro)")
     p.add_argument("--t-end", type=float, default=40.0, metavar="S", help="simulated time [s] (default 40)")
-    p.add_argument("--effects", metavar="A,B",
-                   help="add effects to the nonlinear plant (names as in 'kilnctl diagnose', e.g. second_motor)")
-    p.add_argument("--model-from", metavar="DIAGNOSE.json",
-                   help="verify on the structure and calibrated values a diagnosis learned ('kilnctl diagnose "
-                        "--json' output saved to a file); the gains stay those of --config or the design")
-    p.add_argument("--plot", metavar="FILE", help="write the comparison figure (format from the extension)")
-    p.add_argument("--report", metavar="DIR", help="write verify.html (one page, figure embedded), verify.json and "
-                   "verify.png into DIR")
-    p.add_argument("--json", action="store_true", help="print JSON instead of a table")
-    p.set_defaults(func=run)
+    add_options(p, effects="add effects to the nonlinear plant (names as in 'kilnctl diagnose', e.g. second_motor)",
+                model_from="verify on the structure and calibrated values a diagnosis learned ('kilnctl diagnose "
+                           "--json' output saved to a file); the gains stay those of --config or the design",
+                plot=True, report="write verify.html (one page, figure embedded), verify.json and verify.png into DIR",
+                json=True)
 
 
 def run(args) -> int:
