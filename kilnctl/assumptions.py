@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import sys
 
-from .params import SPECS, Parameters
+from .params import GROUPS, SPECS, Parameters
 
 _READINGS = """\
 ## Readings of the paper (NOTES.md), each a named option or parameter
@@ -45,12 +45,13 @@ def render(params: Parameters | None = None) -> str:
     """
     params = Parameters() if params is None else params
     out = ["# Assumptions and parameter sources", "",
-           "Generated from `kilnctl/params.py` by `python -m kilnctl.assumptions`; do not edit by hand.",
+           "Generated from the parameter declarations of the components in `kilnctl/model/` by",
+           "`python -m kilnctl.assumptions`; do not edit by hand.",
            "Every value is in SI units unless the unit says otherwise. A source `Table 1` or `eq. N` is the",
            "paper; `assumed: ...` is a choice kilnctl makes, with its reason. All are parameters: override",
            "them in a TOML file (`kilnctl params --config FILE`).", "", _READINGS, ""]
     groups: dict[str, list] = {}
-    for spec in SPECS.values():
+    for spec in sorted(SPECS.values(), key=lambda s: GROUPS.index(s.group)):
         groups.setdefault(spec.group, []).append(spec)
     for group, specs in groups.items():
         out += [f"## [{group}]", "", "| name | value | unit | what | source |", "|---|---|---|---|---|"]

@@ -1,11 +1,16 @@
 """Parameter sets of the kiln drive, with units and sources.
 
-Every symbol of the paper's Table 1 and nomenclature is here, in SI units
-(speeds of the speed loop in r.p.m., as the paper's controller uses them), each
-with the place it comes from: ``Table 1``, an equation number, or
+Every symbol of the paper's Table 1 and nomenclature is a parameter, in SI
+units (speeds of the speed loop in r.p.m., as the paper's controller uses
+them), each with the place it comes from: ``Table 1``, an equation number, or
 ``assumed: <why>``.  Every reading the paper leaves open (see
 ``docs/assumptions.md``) is a named parameter or option, never a constant
 buried in a model.
+
+Each parameter is declared once, by the component of :mod:`kilnctl.model`
+that owns it (its ``parameters``, made with :func:`param`); :data:`SPECS` is
+derived from the registry.  This module validates values against the
+declarations and reads and writes parameter files.
 
 Examples
 --------
@@ -31,8 +36,8 @@ import tomli_w
 from .errors import ConfigFileError, ParameterError, close_matches_hint
 from .files import read_toml, write_atomic
 
-__all__ = ["ParamSpec", "Parameters", "SPECS", "GROUPS", "Implausible", "plausibility", "check_plausible",
-           "HARD_FACTOR", "SLIP_FACTOR"]
+__all__ = ["ParamSpec", "Parameters", "SPECS", "GROUPS", "param", "RegistryView", "Implausible", "plausibility",
+           "check_plausible", "HARD_FACTOR", "SLIP_FACTOR"]
 
 #: rules a numeric value may be held to
 _RULES = {
@@ -82,116 +87,95 @@ class ParamSpec:
         return bool(self.choices)
 
 
-def _p(name, default, unit, source, description, group, rule="positive", choices=()):
+def param(name: str, default: float | str, unit: str, source: str, description: str, group: str,
+          rule: str = "positive", choices=()) -> ParamSpec:
+    """Declare a parameter; a component lists what it declares in its ``parameters``.
+
+    Parameters
+    ----------
+    name : str
+        Key, after the paper's nomenclature where it has one.
+    default : float or str
+        Default value [``unit``]; a string for an option.
+    unit : str
+        Unit of the value (``-`` when dimensionless).
+    source : str
+        ``Table 1``, ``eq. N``, or ``assumed: <why>``.
+    description : str
+        What the parameter is.
+    group : str
+        TOML section it is saved in (one of :data:`GROUPS`).
+    rule : str, default 'positive'
+        Bound every value must respect: ``finite``, ``positive``, ``nonnegative`` or ``fraction``.
+    choices : sequence of str, optional
+        Allowed values of an option.
+
+    Returns
+    -------
+    ParamSpec
+    """
     return ParamSpec(name, default, unit, source, description, group, rule, tuple(choices))
 
 
-_SPEC_LIST = [
-    # --- DC motor (eq. 21) -------------------------------------------------------
-    _p("R_a", 0.00961, "ohm", "Table 1", "armature resistance", "motor"),
-    _p("L_a", 0.57e-3, "H", "Table 1", "armature inductance", "motor"),
-    _p("k_i", 4.6, "N*m/A", "Table 1 (printed as N.m/r.p.m., read in SI)", "torque constant", "motor"),
-    _p("k_b", 4.6, "V*s/rad", "assumed: nomenclature line 'k_b k_i' is garbled; read as equal to k_i in SI "
-       "(gives 241 V back-emf at 500 rpm)", "back-emf constant", "motor"),
-    _p("J_m", 21.5, "kg*m^2", "Table 1", "inertia of motor", "motor"),
-    _p("B_m", 0.005, "N*m*s/rad", "Table 1", "viscous friction coefficient of the motor", "motor", "nonnegative"),
-    _p("J_m2", 21.5, "kg*m^2", "assumed: the paper's second motor is of the same type as the first",
-       "inertia of the second, electrically isolated motor (component 'second_motor')", "motor"),
-    # --- speed controller (eq. 21, Fig. 3) --------------------------------------
-    _p("K_fb", 60.0 / (2.0 * math.pi), "rpm*s/rad", "eq. 21; NOTES: the unit conversion 60/(2 pi)",
-       "speed feedback constant K (called k in eq. 21)", "controller"),
-    _p("gains", "design", "-", "assumed: the paper designs the gains by root locus and does not print them",
-       "'design': k_p, k_I, k_D come from the root-locus design with default requirements; "
-       "'given': use k_p, k_I, k_D below", "controller", choices=("design", "given")),
-    _p("k_p", 1.0, "V/rpm", "assumed: placeholder used only when gains = 'given'",
-       "proportional constant", "controller", "nonnegative"),
-    _p("k_I", 1.0, "V/(rpm*s)", "assumed: placeholder used only when gains = 'given'",
-       "integral constant", "controller", "nonnegative"),
-    _p("k_D", 0.01, "V*s/rpm", "assumed: placeholder used only when gains = 'given'",
-       "derivative constant (realised through L_a, eq. 21 line 2)", "controller", "nonnegative"),
-    # --- drive: reference and limits -------------------------------------------
-    _p("omega_ref", 500.0, "rpm", "paper: optimum operating speed 500 r.p.m.", "motor speed set point", "drive"),
-    _p("ramp_rate", 74.0, "rpm/s", "assumed reading of the paper's ramp constant 74: the speed reference "
-       "rises at 74 rpm/s and reaches 500 rpm after 6.76 s", "ramp constant of the speed reference", "drive"),
-    _p("V_max", 500.0, "V", "assumed: supply for the paper's 1000 rpm top speed (k_b * 104.7 rad/s = 482 V)",
-       "armature voltage limit of the drive (applies to the PI output)", "drive"),
-    _p("I_max", 1500.0, "A", "assumed: about 1.8 x the 840 A worked steady-state current, a usual "
-       "short-time rating", "armature current limit of the drive", "drive"),
-    # --- kiln and burden (eqs. 1-19) --------------------------------------------
-    _p("J_o", 6.978e6, "kg*m^2", "Table 1", "inertia of kiln", "kiln"),
-    _p("J_v", 1.678e6, "kg*m^2", "Table 1", "inertia of burden", "kiln"),
-    _p("J_e", 8.476e6, "kg*m^2", "Table 1 (2 % below J_o + J_v = 8.656e6)",
-       "equivalent inertia J_e = J_o + J_v as printed; used only when J_e_mode = 'table'", "kiln"),
-    _p("J_e_mode", "sum", "-", "NOTES: Table 1 J_e disagrees with J_o + J_v by 2 %",
-       "'sum': J_e = J_o + J_v; 'table': J_e as printed, the kiln shell then has J_e - J_v",
-       "kiln", choices=("sum", "table")),
-    _p("m_v", 580e3, "kg", "Table 1", "mass of burden", "kiln"),
-    _p("L", 1.353, "m", "Table 1", "torque arm of burden (centre of mass from kiln axis)", "kiln"),
-    _p("R", 2.17, "m", "Table 1", "radius of kiln (arm of the wall friction force)", "kiln"),
-    _p("mu_c", 0.4, "-", "paper, Fig. 4: mu3 fits best", "Coulomb (kinetic) friction coefficient of burden", "kiln", "nonnegative"),
-    _p("mu_s", 0.51, "-", "paper, Fig. 4: mu3 fits best", "static friction coefficient of burden", "kiln", "nonnegative"),
-    _p("friction_law", "paper", "-", "NOTES: the printed law is not torque-consistent",
-       "'paper': breakaway when F_t > F_bf (forces, eq. 3); 'torque': breakaway when the holding torque "
-       "exceeds mu_s*N*R. Both use kinetic torque mu_c*N*R opposing the relative velocity and re-stick",
-       "kiln", choices=("paper", "torque")),
-    _p("psi_0", 0.0, "rad", "assumed: the paper does not give the initial burden angle; burden at rest at "
-       "the bottom", "initial burden angle from bottom dead centre", "kiln", "finite"),
-    _p("g", 9.81, "m/s^2", "nomenclature", "gravitational constant", "kiln"),
-    _p("mu_brg", 0.001, "-", "Le Roux [10], eq. 17", "friction coefficient of support roller bearings",
-       "kiln", "nonnegative"),
-    _p("P", 16.512e6, "N", "Table 1", "total weight of kiln", "kiln", "nonnegative"),
-    _p("l_brg", 0.7155, "m", "Table 1 ('l')", "torque arm of bearing l (eq. 17)", "kiln", "nonnegative"),
-    _p("k_brg", 0.5475, "m", "Table 1 ('k'; not the feedback constant K)", "torque arm of bearing k (eq. 17)",
-       "kiln", "nonnegative"),
-    # --- drive train and gears (eqs. 26-34) -------------------------------------
-    _p("n", 1076.5, "-", "Table 1", "total reduction motor to kiln", "gear"),
-    _p("R_o", 3.960, "m", "Table 1", "pitch circle radius of girth gear", "gear"),
-    _p("R_p", 0.5775, "m", "Table 1", "pitch circle radius of pinion", "gear"),
-    _p("k_o", 2.986e10, "N/m", "Table 1", "spring constant of girth gear teeth", "gear"),
-    _p("k_pi", 2.986e10, "N/m", "Table 1", "spring constant of pinion gear teeth", "gear"),
-    _p("C_e", 8.2e5, "N*s/m", "assumed: 5 % damping ratio of the pinion (J_p) on the mesh stiffness k_e",
-       "mesh damping constant", "gear", "nonnegative"),
-    _p("delta_x", 8e-3, "m", "paper: normal backlash about 8 mm (studied 0-16 mm)",
-       "backlash between girth gear and pinion (Delta x)", "gear", "nonnegative"),
-    _p("gap_0", 1.0, "-", "assumed: worst case, the whole backlash must be taken up at start",
-       "fraction of the backlash open at t = 0 (1: pinion on the back flank)", "gear", "fraction"),
-    _p("J_p", 1500.0, "kg*m^2", "assumed: steel pinion r = 0.5775 m, b = 0.6 m (about 1 100 kg*m^2) plus "
-       "gearbox output", "inertia of pinion and gearbox output, pinion axis", "gear"),
-    _p("k_po", 7.012e8, "N*m/rad", "Table 1", "equivalent torsional spring constant (component "
-       "'drivetrain_compliance', kiln axis)", "gear"),
-    _p("C_po", 19.9e6, "N*m*s/rad", "Table 1", "equivalent torsional damping constant (component "
-       "'drivetrain_compliance', kiln axis)", "gear", "nonnegative"),
-    _p("module", 0.033, "m", "assumed: 33 mm gives integer tooth counts 240/35 for R_o, R_p exactly",
-       "module of girth gear and pinion", "gear"),
-    _p("face_width", 0.6, "m", "assumed: typical girth gear face width (about 18 modules)",
-       "face width of the girth gear", "gear"),
-    _p("Y_lewis", 0.468, "-", "assumed: Lewis form factor, 20 deg full depth, 240 teeth (Michalopoulos [11])",
-       "Lewis form factor of the girth gear tooth", "gear"),
-    _p("dynamic_factor", "none", "-", "assumed: at 0.19 m/s pitch-line speed Barth's factor is only 1.03",
-       "'none' or 'barth' ((6.1 + V)/6.1) on the Lewis stress", "gear", choices=("none", "barth")),
-    # --- effects a measurement may reveal (components in kilnctl/model/effects.py) ---
-    _p("tau_s", 0.05, "s", "assumed: first-order lag of a tacho-generator with filter",
-       "speed sensor time constant (component 'speed_sensor_lag')", "effects"),
-    _p("T_unb", 2.0e5, "N*m", "assumed: about 5 % of the 4.2 MN*m kiln running torque",
-       "amplitude of the once-per-revolution kiln torque (component 'kiln_unbalance')", "effects", "nonnegative"),
-    _p("phi_unb", 0.0, "rad", "assumed: phase of the eccentric mass or shell crank at t = 0",
-       "phase of the once-per-revolution torque (component 'kiln_unbalance')", "effects", "finite"),
-    _p("B_o", 1.0e6, "N*m*s/rad", "assumed: about 1 % of the running torque at 0.46 rpm (seals, tyre slip)",
-       "viscous drag on the kiln (component 'viscous_drag')", "effects", "nonnegative"),
-    # --- elastomeric coupling (micro model) -------------------------------------
-    _p("k_c", 1.0e5, "N*m/rad", "assumed: thesis [9] not available; large elastomeric coupling, "
-       "about 2.5 deg twist at the 4 kN*m running torque", "coupling stiffness at zero twist, motor side",
-       "coupling"),
-    _p("phi_c_ref", 0.05, "rad", "assumed: progressive rubber; stiffness doubles at 0.05 rad twist",
-       "twist scale of the progressive term: T = k_c*phi*(1 + (phi/phi_c_ref)^2)", "coupling"),
-    _p("coupling_law", "progressive", "-", "assumed: shape of the elastomer curve",
-       "'progressive' or 'linear' torque-twist curve", "coupling", choices=("progressive", "linear")),
-    _p("c_c", 150.0, "N*m*s/rad", "assumed: about 10 % damping ratio of the coupling mode",
-       "coupling damping constant, motor side", "coupling", "nonnegative"),
-]
+class RegistryView(Mapping):
+    """A read-only table derived from the component registry, rebuilt when a component is registered.
 
-#: all parameter declarations, by name
-SPECS: dict[str, ParamSpec] = {s.name: s for s in _SPEC_LIST}
+    Parameters
+    ----------
+    build : callable
+        ``build(registry) -> dict``, from :data:`kilnctl.model.REGISTRY` (name -> component class).
+    """
+
+    def __init__(self, build):
+        self._build = build
+        self._table: dict = {}
+        self._size = -1
+
+    def _current(self) -> dict:
+        from .model.base import REGISTRY  # importing kilnctl.model registers every component
+
+        if self._size != len(REGISTRY):
+            self._table, self._size = self._build(REGISTRY), len(REGISTRY)
+        return self._table
+
+    def __getitem__(self, key):
+        return self._current()[key]
+
+    def __iter__(self):
+        return iter(self._current())
+
+    def __len__(self) -> int:
+        return len(self._current())
+
+    def __contains__(self, key) -> bool:
+        return key in self._current()
+
+    def __repr__(self) -> str:
+        return f"RegistryView({self._current()!r})"
+
+
+def _declarations(registry) -> dict[str, ParamSpec]:
+    """Every parameter declared by a registered component (its own ``parameters``, not inherited ones),
+    in registration order."""
+    out: dict[str, ParamSpec] = {}
+    owner: dict[str, str] = {}
+    for comp in registry.values():
+        for spec in vars(comp).get("parameters", ()):
+            if spec.name in out:
+                raise ParameterError(f"parameter {spec.name!r} is declared by both component {owner[spec.name]!r} "
+                                     f"and {comp.name!r}: declare it once, in the component that owns it, and list "
+                                     "it in the other's param_names")
+            if spec.group not in GROUPS:
+                raise ParameterError(f"parameter {spec.name!r} of component {comp.name!r} is in group "
+                                     f"{spec.group!r}: use one of {', '.join(GROUPS)}")
+            out[spec.name] = spec
+            owner[spec.name] = comp.name
+    return out
+
+
+#: all parameter declarations, by name: derived from the components of kilnctl.model (each declares its own in
+#: ``parameters``), in registration order
+SPECS: Mapping[str, ParamSpec] = RegistryView(_declarations)
 #: TOML section order
 GROUPS: tuple[str, ...] = ("motor", "controller", "drive", "kiln", "gear", "coupling", "effects")
 
@@ -263,7 +247,7 @@ def plausibility(params: "Parameters") -> list[Implausible]:
         In declaration order; empty when nothing looks wrong.
     """
     out = []
-    for spec in _SPEC_LIST:
+    for spec in SPECS.values():
         v = params[spec.name]
         if spec.is_option or v == 0:
             continue
@@ -515,7 +499,7 @@ class Parameters(Mapping):
         return [
             {"name": s.name, "value": self._values[s.name], "unit": s.unit, "source": s.source,
              "description": s.description, "group": s.group, "default": s.default}
-            for s in _SPEC_LIST
+            for s in sorted(SPECS.values(), key=lambda s: GROUPS.index(s.group))
         ]
 
     def to_toml(self, path: str | os.PathLike, *, overwrite: bool = False) -> Path:
@@ -540,7 +524,7 @@ class Parameters(Mapping):
         if path.exists() and not overwrite:
             raise ConfigFileError(f"{path}: file exists; choose another name or pass overwrite=True")
         doc: dict[str, dict[str, Any]] = {g: {} for g in GROUPS}
-        for s in _SPEC_LIST:
+        for s in SPECS.values():
             doc[s.group][s.name] = self._values[s.name]
         write_atomic(path, tomli_w.dumps(doc))
         return path

@@ -7,13 +7,24 @@
 
 from __future__ import annotations
 
+import importlib
+import pkgutil
+
 from ..errors import ModelError, close_matches_hint
-from . import drive, drivetrain, effects, kiln  # noqa: F401  (register the components)
+from . import drive, drivetrain, kiln, effects  # noqa: F401  (register the components)
 from . import ramps, smooth  # noqa: F401  (reference profiles and smoothed components for optimization)
-from .assembly import Plant, get_plant
+
+#: modules of this package that hold no components
+_MACHINERY = ("assembly", "base", "catalogue", "compiled", "stepper")
+# every other module is a component file: importing it registers its components (a new effect is one new file)
+for _mod in pkgutil.iter_modules(__path__):
+    if _mod.name not in _MACHINERY:
+        importlib.import_module(f"{__name__}.{_mod.name}")
+
+from .assembly import Plant, get_plant  # noqa: E402  (after the components: the parameter table is complete)
 from .base import REGISTRY, Component, Guard, StateVar, register
 
-__all__ = ["MODELS", "ORDER", "component_names", "Plant", "get_plant", "REGISTRY", "Component", "Guard",
+__all__ = ["MODELS", "ORDER", "component_names", "phase_rank", "Plant", "get_plant", "REGISTRY", "Component", "Guard",
            "StateVar", "register", "describe_components"]
 
 #: phase order of the components: signals flow from the ramp to the stress
@@ -72,16 +83,19 @@ def component_names(model: str = "macro", add=(), remove=()) -> tuple[str, ...]:
                 names.remove(rep)
         if nm not in names:
             names.append(nm)
-    return tuple(sorted(names, key=_rank))
+    return tuple(sorted(names, key=phase_rank))
 
 
-def _rank(name: str) -> float:
+def phase_rank(name: str) -> float:
     """Phase rank of a component: its place in ORDER; reference profiles (``ramp_*``) right after
-    ``ramp``, smoothed variants (``*_smooth``) at the place of the component they smooth, others
-    just before ``bending_stress``."""
+    ``ramp``, smoothed variants (``*_smooth``) at the place of the component they smooth, a component
+    with ``phase_after`` right after that one, others just before ``bending_stress``."""
     rank = {nm: i for i, nm in enumerate(ORDER)}
     if name in rank:
         return rank[name]
+    after = getattr(REGISTRY.get(name), "phase_after", None)
+    if after in rank:
+        return rank[after] + 0.25
     if name.startswith("ramp_"):
         return rank["ramp"] + 0.5
     if name.endswith("_smooth") and name[: -len("_smooth")] in rank:

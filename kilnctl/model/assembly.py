@@ -18,7 +18,7 @@ import numpy as np
 
 from ..errors import ModelError, close_matches_hint
 from ..params import Parameters
-from .base import NUMERIC_NAMES, OPTION_NAMES, REGISTRY, Component, Guard, ModelSpec, SymParams
+from .base import REGISTRY, Component, Guard, ModelSpec, SymParams, numeric_names, option_names
 from .compiled import compile_function
 from .stepper import build_stepper
 
@@ -323,8 +323,8 @@ class Plant:
 
     # --- numeric helpers ----------------------------------------------------
     def param_vector(self, params: Parameters) -> np.ndarray:
-        """Numeric parameter vector in :data:`NUMERIC_NAMES` order."""
-        return np.array([params[n] for n in NUMERIC_NAMES], dtype=float)
+        """Numeric parameter vector in :func:`~kilnctl.model.base.numeric_names` order."""
+        return np.array([params[n] for n in numeric_names()], dtype=float)
 
     def initial(self, params: Parameters) -> tuple[np.ndarray, tuple]:
         """Initial scaled state and mode at t = 0.
@@ -480,5 +480,5 @@ def get_plant(names, params: Parameters, n_grid: int = 500, rtol: float = 1e-8, 
     -------
     Plant
     """
-    options = tuple((k, params[k]) for k in OPTION_NAMES)
+    options = tuple((k, params[k]) for k in option_names())
     return _plant_cached(tuple(names), options, int(n_grid), float(rtol), float(atol))

@@ -25,15 +25,29 @@ from typing import Callable, ClassVar
 import casadi as ca
 
 from ..errors import ModelError, close_matches_hint
-from ..params import SPECS, Parameters
+from ..params import SPECS, ParamSpec, Parameters
 
 __all__ = ["StateVar", "Guard", "Component", "REGISTRY", "register", "SymParams", "OPTION_NAMES",
-           "NUMERIC_NAMES"]
+           "NUMERIC_NAMES", "option_names", "numeric_names"]
 
-#: names of the string options (they select the structure, not a value)
-OPTION_NAMES: tuple[str, ...] = tuple(n for n, s in SPECS.items() if s.is_option)
-#: names of the numeric parameters (symbolic inputs of every model function)
-NUMERIC_NAMES: tuple[str, ...] = tuple(n for n, s in SPECS.items() if not s.is_option)
+
+def option_names() -> tuple[str, ...]:
+    """Names of the string options (they select the structure, not a value), in declaration order."""
+    return tuple(n for n, s in SPECS.items() if s.is_option)
+
+
+def numeric_names() -> tuple[str, ...]:
+    """Names of the numeric parameters (symbolic inputs of every model function), in declaration order."""
+    return tuple(n for n, s in SPECS.items() if not s.is_option)
+
+
+def __getattr__(name: str):
+    # OPTION_NAMES and NUMERIC_NAMES are derived from the registered components' declarations when asked for
+    if name == "OPTION_NAMES":
+        return option_names()
+    if name == "NUMERIC_NAMES":
+        return numeric_names()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 @dataclass(frozen=True)
@@ -107,8 +121,9 @@ class SymParams:
 
     def __init__(self, options: dict[str, str]):
         self._options = dict(options)
-        self.vector = ca.SX.sym("P", len(NUMERIC_NAMES))
-        self._sym = {name: self.vector[i] for i, name in enumerate(NUMERIC_NAMES)}
+        names = numeric_names()
+        self.vector = ca.SX.sym("P", len(names))
+        self._sym = {name: self.vector[i] for i, name in enumerate(names)}
 
     def __getattr__(self, key: str):
         if key.startswith("_"):
@@ -143,6 +158,21 @@ class Component:
         Components it takes the place of when added as an effect.
     modes : tuple of str
         Its discrete modes; empty for a smooth component.
+    parameters : tuple of ParamSpec
+        The parameters it owns, declared once here (:func:`kilnctl.params.param`:
+        name, default, unit, source, description, group, bound);
+        :data:`kilnctl.params.SPECS` is derived from these.  Parameters it
+        only uses (owned by another component) appear in ``param_names``.
+    smooth_twin : str or None
+        For a component with modes: the registered mode-free twin (same
+        physics, switches regularised) that the ramp optimizer uses instead.
+    catalogue : tuple of Effect
+        Entries of the effect catalogue (:data:`kilnctl.measure.CATALOGUE`)
+        this component stands for: what the diagnosis tries, with its
+        residual signature, fitted parameters and starting points.
+    phase_after : str or None
+        For a component outside :data:`kilnctl.model.ORDER`: the component
+        after which it is evaluated (default: just before ``bending_stress``).
     """
 
     name: ClassVar[str] = ""
@@ -151,6 +181,10 @@ class Component:
     requires: ClassVar[tuple[str, ...]] = ()
     replaces: ClassVar[tuple[str, ...]] = ()
     modes: ClassVar[tuple[str, ...]] = ()
+    parameters: ClassVar[tuple[ParamSpec, ...]] = ()
+    smooth_twin: ClassVar[str | None] = None
+    catalogue: ClassVar[tuple] = ()
+    phase_after: ClassVar[str | None] = None
 
     def declare(self, spec) -> None:
         """Declare states and mechanical nodes on the model spec."""

@@ -25,9 +25,17 @@ Signals shared between these components (the interface, by name):
 from __future__ import annotations
 
 import casadi as ca
+import numpy as np
 
+from ..params import param
 from ..units import RPM_PER_RAD_S
 from .base import Component, Guard, register
+from .catalogue import Effect, FreeParameter
+
+
+def _peak_current(m) -> float:
+    """A robust peak of the measured current [A] (99.5th percentile of |i|)."""
+    return float(np.percentile(np.abs(m.current), 99.5)) if m is not None else 1000.0
 
 
 @register
@@ -43,6 +51,11 @@ class Ramp(Component):
     name = "ramp"
     summary = "speed reference rising at ramp_rate [rpm/s] to omega_ref [rpm]"
     param_names = ("ramp_rate", "omega_ref")
+    parameters = (
+        param("omega_ref", 500.0, "rpm", "paper: optimum operating speed 500 r.p.m.", "motor speed set point", "drive"),
+        param("ramp_rate", 74.0, "rpm/s", "assumed reading of the paper's ramp constant 74: the speed reference "
+              "rises at 74 rpm/s and reaches 500 rpm after 6.76 s", "ramp constant of the speed reference", "drive"),
+    )
     modes = ("rising", "hold")
 
     def signals(self, e, mode):
@@ -76,6 +89,19 @@ class PID(Component):
     name = "pid"
     summary = "PID on the speed error, derivative realised through L_a (eq. 21)"
     param_names = ("k_p", "k_I", "k_D", "K_fb")
+    parameters = (
+        param("K_fb", RPM_PER_RAD_S, "rpm*s/rad", "eq. 21; NOTES: the unit conversion 60/(2 pi)",
+              "speed feedback constant K (called k in eq. 21)", "controller"),
+        param("gains", "design", "-", "assumed: the paper designs the gains by root locus and does not print them",
+              "'design': k_p, k_I, k_D come from the root-locus design with default requirements; "
+              "'given': use k_p, k_I, k_D below", "controller", choices=("design", "given")),
+        param("k_p", 1.0, "V/rpm", "assumed: placeholder used only when gains = 'given'",
+              "proportional constant", "controller", "nonnegative"),
+        param("k_I", 1.0, "V/(rpm*s)", "assumed: placeholder used only when gains = 'given'",
+              "integral constant", "controller", "nonnegative"),
+        param("k_D", 0.01, "V*s/rpm", "assumed: placeholder used only when gains = 'given'",
+              "derivative constant (realised through L_a, eq. 21 line 2)", "controller", "nonnegative"),
+    )
     requires = ("ramp", "dc_motor")
 
     def declare(self, spec):
@@ -107,6 +133,10 @@ class VoltageLimit(Component):
     name = "voltage_limit"
     summary = "PI voltage clamped to +-V_max, integrator frozen while clamped"
     param_names = ("V_max",)
+    parameters = (
+        param("V_max", 500.0, "V", "assumed: supply for the paper's 1000 rpm top speed (k_b * 104.7 rad/s = 482 V)",
+              "armature voltage limit of the drive (applies to the PI output)", "drive"),
+    )
     requires = ("pid",)
     modes = ("free", "upper", "lower")
 
@@ -141,6 +171,16 @@ class DCMotor(Component):
     name = "dc_motor"
     summary = "armature circuit and motor inertia (eq. 4, eq. 21)"
     param_names = ("R_a", "L_a", "k_i", "k_b", "J_m", "B_m")
+    parameters = (
+        param("R_a", 0.00961, "ohm", "Table 1", "armature resistance", "motor"),
+        param("L_a", 0.57e-3, "H", "Table 1", "armature inductance", "motor"),
+        param("k_i", 4.6, "N*m/A", "Table 1 (printed as N.m/r.p.m., read in SI)", "torque constant", "motor"),
+        param("k_b", 4.6, "V*s/rad", "assumed: nomenclature line 'k_b k_i' is garbled; read as equal to k_i in SI "
+              "(gives 241 V back-emf at 500 rpm)", "back-emf constant", "motor"),
+        param("J_m", 21.5, "kg*m^2", "Table 1", "inertia of motor", "motor"),
+        param("B_m", 0.005, "N*m*s/rad", "Table 1", "viscous friction coefficient of the motor", "motor",
+              "nonnegative"),
+    )
 
     def declare(self, spec):
         spec.add_state("x_a", "A", 1000.0, "armature current less the derivative term (k_D/L_a)*e_f")
@@ -166,6 +206,39 @@ class DCMotor(Component):
             e.set_rate("x_a", (e.sig["e_a"] - p.R_a * e.sig["i_a"] - p.k_b * e.x["omega_motor"]) / p.L_a)
         e.add_output("i_a", e.sig["i_a"])
         e.add_output("speed_rpm", e.x["omega_motor"] * RPM_PER_RAD_S)
+
+
+@register
+class SecondMotor(Component):
+    """Second drive motor, electrically isolated but mechanically coupled.
+
+    As in the paper's experiment (Fig. 5): it delivers no torque, but its
+    rotor inertia J_m2 must be accelerated with the first motor.
+    """
+
+    name = "second_motor"
+    summary = "inertia J_m2 of the isolated second motor on the motor shaft"
+    param_names = ("J_m2",)
+    parameters = (
+        param("J_m2", 21.5, "kg*m^2", "assumed: the paper's second motor is of the same type as the first",
+              "inertia of the second, electrically isolated motor (component 'second_motor')", "motor"),
+    )
+    catalogue = (
+        Effect(
+            "second_motor",
+            "A second drive motor, electrically isolated but still coupled to the shaft: its rotor inertia "
+            "must be accelerated with the first motor (the paper's experiment, Fig. 5).",
+            ("second_motor",), {}, None,
+            (FreeParameter("J_m2", 0.0, 2000.0, "lin", 21.5),),
+            "current above the model while the drive accelerates (the ramp), by J_m2 x acceleration / k_i, "
+            "and a step down when the ramp ends; no error at constant speed",
+            starts=lambda params, m: [{"J_m2": params.J_m}, {"J_m2": 0.3 * params.J_m}, {"J_m2": 3 * params.J_m}],
+            plausible={"J_m2": (10.0, 45.0)}, null={"J_m2": 0.0}),
+    )
+    requires = ("dc_motor",)
+
+    def loads(self, e, mode):
+        e.add_inertia("motor", e.p.J_m2)
 
 
 @register
@@ -196,6 +269,25 @@ class CurrentLimit(Component):
     name = "current_limit"
     summary = "armature current held at +-I_max, integrator frozen while held"
     param_names = ("I_max",)
+    parameters = (
+        param("I_max", 1500.0, "A", "assumed: about 1.8 x the 840 A worked steady-state current, a usual "
+              "short-time rating", "armature current limit of the drive", "drive"),
+    )
+    catalogue = (
+        Effect(
+            "current_limit",
+            "The drive limits the armature current lower than the setup says: the current is held flat at "
+            "I_max and the speed falls behind its reference while it is.",
+            ("current_limit",), {}, None,
+            (FreeParameter("I_max", 10.0, 20000.0, "log", 1000.0),),
+            "the measured current flat-topped at a plateau the model exceeds, while the speed lags the reference; "
+            "the model's current peak is above the measured one",
+            starts=lambda params, m: [{"I_max": f * _peak_current(m)} for f in (0.9, 0.95, 0.98, 1.0, 1.02, 1.05, 1.1)]
+            + [{"I_max": params.I_max}],
+            plausible={"I_max": (0.9, 0.98)}, separation=0.02, null={}, relative_plausible=("I_max",),
+            notes="current_limit is in both base models with the setup's I_max; as a candidate, I_max is freed. "
+                  "Synthetic records draw I_max as a fraction of the plant's peak current without the limit."),
+    )
     requires = ("dc_motor", "pid")
     modes = ("free", "upper", "lower", "slide_upper", "slide_lower")
 
@@ -242,21 +334,3 @@ class CurrentLimit(Component):
             if "lower" in cycle or "slide_lower" in cycle:
                 return "slide_lower"
         return None
-
-
-@register
-class SecondMotor(Component):
-    """Second drive motor, electrically isolated but mechanically coupled.
-
-    As in the paper's experiment (Fig. 5): it delivers no torque, but its
-    rotor inertia J_m2 must be accelerated with the first motor.
-    """
-
-    name = "second_motor"
-    summary = "inertia J_m2 of the isolated second motor on the motor shaft"
-    param_names = ("J_m2",)
-    requires = ("dc_motor",)
-
-    def loads(self, e, mode):
-        e.add_inertia("motor", e.p.J_m2)
-

@@ -8,9 +8,13 @@ train).
 
 from __future__ import annotations
 
+import math
+
 import casadi as ca
 
+from ..params import param
 from .base import Component, register
+from .catalogue import Effect, FreeParameter
 
 
 @register
@@ -23,6 +27,23 @@ class SpeedSensorLag(Component):
     name = "speed_sensor_lag"
     summary = "controller sees the motor speed through a first-order lag tau_s"
     param_names = ("tau_s",)
+    parameters = (
+        param("tau_s", 0.05, "s", "assumed: first-order lag of a tacho-generator with filter",
+              "speed sensor time constant (component 'speed_sensor_lag')", "effects"),
+    )
+    catalogue = (
+        Effect(
+            "speed_sensor_lag",
+            "The controller sees the motor speed through a first-order lag (tacho filter, encoder averaging).",
+            ("speed_sensor_lag",), {}, None,
+            (FreeParameter("tau_s", 1e-4, 2.0, "log", 0.005),),
+            "a less damped speed loop: current oscillation at the loop's crossover after the ramp starts and "
+            "ends, larger overshoot of the speed; residual correlated with the speed error",
+            starts=lambda params, m: [{"tau_s": 0.001}, {"tau_s": 0.003}, {"tau_s": 0.01}],
+            plausible={"tau_s": (0.002, 0.006)}, null={"tau_s": 1e-4},
+            notes="the record's speed_rpm is read as the true motor speed; only the controller's copy lags. "
+                  "Large lags can destabilise the loop: such trial runs are cut short and count as a poor fit."),
+    )
     requires = ("pid",)
 
     def declare(self, spec):
@@ -48,6 +69,30 @@ class KilnUnbalance(Component):
     name = "kiln_unbalance"
     summary = "once-per-revolution kiln torque T_unb*sin(theta_o + phi_unb)"
     param_names = ("T_unb", "phi_unb")
+    parameters = (
+        param("T_unb", 2.0e5, "N*m", "assumed: about 5 % of the 4.2 MN*m kiln running torque",
+              "amplitude of the once-per-revolution kiln torque (component 'kiln_unbalance')", "effects",
+              "nonnegative"),
+        param("phi_unb", 0.0, "rad", "assumed: phase of the eccentric mass or shell crank at t = 0",
+              "phase of the once-per-revolution torque (component 'kiln_unbalance')", "effects", "finite"),
+    )
+    catalogue = (
+        Effect(
+            "kiln_unbalance",
+            "A once-per-revolution torque on the kiln from an eccentric mass (coating, accretion) or a "
+            "cranked shell: T_unb sin(theta_o + phi_unb).",
+            ("kiln_unbalance",), {}, None,
+            (FreeParameter("T_unb", 0.0, 2e7, "polar", 2e5, partner="phi_unb"),),
+            "a slow sinusoidal drift of the current with the kiln angle (one period per kiln revolution, "
+            "about 130 s at 500 rpm): in a short record, a slowly rising or falling offset",
+            starts=lambda params, m: [{"T_unb": 1e4, "phi_unb": 0.0}],
+            plausible={"T_unb": (1e5, 4e5), "phi_unb": (0.0, 2 * math.pi)}, null={"T_unb": 0.0, "phi_unb": 0.0},
+            period=lambda params, omega_ref: 60.0 * params.n / omega_ref,  # one kiln revolution at the set speed
+            short_record_note="a slow drift, which a current-sensor offset or gain error, or slowly correlated "
+                              "noise, also produce",
+            notes="fitted as the pair (T cos phi, T sin phi), which is linear in the torque; T_unb and phi_unb "
+                  "and their standard errors follow."),
+    )
     requires = ("kiln",)
 
     def declare(self, spec):
@@ -67,6 +112,22 @@ class ViscousDrag(Component):
     name = "viscous_drag"
     summary = "viscous drag torque -B_o*omega_o on the kiln"
     param_names = ("B_o",)
+    parameters = (
+        param("B_o", 1.0e6, "N*m*s/rad", "assumed: about 1 % of the running torque at 0.46 rpm (seals, tyre slip)",
+              "viscous drag on the kiln (component 'viscous_drag')", "effects", "nonnegative"),
+    )
+    catalogue = (
+        Effect(
+            "viscous_drag",
+            "A torque proportional to the kiln speed (seals, tyre and roller slip, lubricant drag): "
+            "-B_o omega_o.",
+            ("viscous_drag",), {}, None,
+            (FreeParameter("B_o", 0.0, 1e9, "lin", 1e6),),
+            "current above the model in proportion to the speed: growing along the ramp, then a constant "
+            "offset at steady speed (which alone a burden mass or friction change could also explain)",
+            starts=lambda params, m: [{"B_o": 1e5}, {"B_o": 3e6}],
+            plausible={"B_o": (2e6, 1e7)}, null={"B_o": 0.0}),
+    )
     requires = ("kiln",)
 
     def loads(self, e, mode):

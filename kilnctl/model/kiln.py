@@ -10,13 +10,38 @@ from __future__ import annotations
 
 import casadi as ca
 
+from ..params import param
 from ..units import RPM_PER_RAD_S
 from .base import Component, Guard, register
+from .catalogue import Effect
 
 #: speed that regularises the bearing friction at standstill [rad/s] (numerical, not physical)
 BEARING_OMEGA_EPS = 1e-4
 #: scale of the relative burden speed in the re-stick guard [rad/s]
 V_REL_SCALE = 1e-2
+
+
+def bearing_torque(omega_kiln, p, tanh=ca.tanh):
+    """Support-roller bearing friction torque on the kiln, eq. 17, in the sense of rotation [N*m].
+
+    T_brg*tanh(omega_o/BEARING_OMEGA_EPS), T_brg = 2*mu_brg*(P/2)*cos(30 deg)*(l + k)/2
+    (:attr:`kilnctl.params.Parameters.T_brg`); the tanh regularises the sign at standstill.
+
+    Parameters
+    ----------
+    omega_kiln : casadi.SX or array
+        Kiln speed [rad/s].
+    p : Parameters or SymParams
+        Parameters (numeric or symbolic).
+    tanh : callable, default casadi.tanh
+        Hyperbolic tangent matching the arguments (``numpy.tanh`` for arrays).
+
+    Returns
+    -------
+    casadi.SX or array
+        Torque [N*m]; the kiln receives its negative.
+    """
+    return p.T_brg * tanh(omega_kiln / BEARING_OMEGA_EPS)
 
 
 @register
@@ -30,6 +55,14 @@ class Kiln(Component):
     name = "kiln"
     summary = "kiln shell inertia (J_o, or J_e - J_v)"
     param_names = ("J_o", "J_e")
+    parameters = (
+        param("J_o", 6.978e6, "kg*m^2", "Table 1", "inertia of kiln", "kiln"),
+        param("J_e", 8.476e6, "kg*m^2", "Table 1 (2 % below J_o + J_v = 8.656e6)",
+              "equivalent inertia J_e = J_o + J_v as printed; used only when J_e_mode = 'table'", "kiln"),
+        param("J_e_mode", "sum", "-", "NOTES: Table 1 J_e disagrees with J_o + J_v by 2 %",
+              "'sum': J_e = J_o + J_v; 'table': J_e as printed, the kiln shell then has J_e - J_v",
+              "kiln", choices=("sum", "table")),
+    )
 
     def declare(self, spec):
         spec.add_node("kiln", "kiln shell and girth gear", 0.05)
@@ -65,10 +98,18 @@ class BearingFriction(Component):
     name = "bearing_friction"
     summary = "support-roller bearing friction torque (eq. 17)"
     param_names = ("mu_brg", "P", "l_brg", "k_brg")
+    parameters = (
+        param("mu_brg", 0.001, "-", "Le Roux [10], eq. 17", "friction coefficient of support roller bearings",
+              "kiln", "nonnegative"),
+        param("P", 16.512e6, "N", "Table 1", "total weight of kiln", "kiln", "nonnegative"),
+        param("l_brg", 0.7155, "m", "Table 1 ('l')", "torque arm of bearing l (eq. 17)", "kiln", "nonnegative"),
+        param("k_brg", 0.5475, "m", "Table 1 ('k'; not the feedback constant K)", "torque arm of bearing k (eq. 17)",
+              "kiln", "nonnegative"),
+    )
     requires = ("kiln",)
 
     def loads(self, e, mode):
-        e.add_torque("kiln", -e.p.T_brg * ca.tanh(e.x["omega_kiln"] / BEARING_OMEGA_EPS))
+        e.add_torque("kiln", -bearing_torque(e.x["omega_kiln"], e.p))
 
 
 @register
@@ -98,8 +139,41 @@ class Burden(Component):
     name = "burden"
     summary = "burden with stick-slip wall friction (eqs. 1-3, 6, 16)"
     param_names = ("m_v", "J_v", "L", "R", "mu_c", "mu_s", "g", "psi_0")
+    parameters = (
+        param("J_v", 1.678e6, "kg*m^2", "Table 1", "inertia of burden", "kiln"),
+        param("m_v", 580e3, "kg", "Table 1", "mass of burden", "kiln"),
+        param("L", 1.353, "m", "Table 1", "torque arm of burden (centre of mass from kiln axis)", "kiln"),
+        param("R", 2.17, "m", "Table 1", "radius of kiln (arm of the wall friction force)", "kiln"),
+        param("mu_c", 0.4, "-", "paper, Fig. 4: mu3 fits best", "Coulomb (kinetic) friction coefficient of burden",
+              "kiln", "nonnegative"),
+        param("mu_s", 0.51, "-", "paper, Fig. 4: mu3 fits best", "static friction coefficient of burden", "kiln",
+              "nonnegative"),
+        param("friction_law", "paper", "-", "NOTES: the printed law is not torque-consistent",
+              "'paper': breakaway when F_t > F_bf (forces, eq. 3); 'torque': breakaway when the holding torque "
+              "exceeds mu_s*N*R. Both use kinetic torque mu_c*N*R opposing the relative velocity and re-stick",
+              "kiln", choices=("paper", "torque")),
+        param("psi_0", 0.0, "rad", "assumed: the paper does not give the initial burden angle; burden at rest at "
+              "the bottom", "initial burden angle from bottom dead centre", "kiln", "finite"),
+        param("g", 9.81, "m/s^2", "nomenclature", "gravitational constant", "kiln"),
+    )
+    catalogue = (
+        Effect(
+            "torque_friction_law",
+            "The burden breaks away when the friction torque needed to hold it exceeds mu_s N R (torque-"
+            "consistent), instead of the paper's force comparison (eq. 3): large stick-slip cycles.",
+            (), {"friction_law": "torque"}, None, (),
+            "a saw-tooth in the current at steady speed: rising while the burden sticks, dropping at each "
+            "breakaway, with a period of seconds; the paper's law gives small sliding oscillations",
+            notes="an option of the burden model, not a component: no new parameter; mu_c and mu_s are refitted "
+                  "(their meaning changes with the law), first on the record up to the end of the current model's "
+                  "first failing interval, then on all of it: the cost of a long run of stick-slip cycles is rugged. "
+                  "A breakaway misplaced in time costs in proportion to the shift (a cusp at the right friction): "
+                  "each fit runs on a residual smoothed over 0.4 s, then 0.1 s, then none.",
+            horizons="after_first_failure", separation=0.04, smoothing=(0.4, 0.1)),
+    )
     requires = ("kiln",)
     modes = ("stick", "slip_pos", "slip_neg", "held")
+    smooth_twin = "burden_smooth"
 
     def declare(self, spec):
         spec.add_node("burden", "burden (rigid disk)", 0.05)

@@ -34,19 +34,23 @@ continuation can sharpen them without rebuilding the model: set them with
 initial state.  All other components (drive, coupling, kiln, stress) are
 smooth already and are used unchanged.  The drive limits are left out of
 the smooth model: the optimizer keeps the unlimited current and voltage
-within I_max, V_max as constraints instead.
+within I_max, V_max as constraints instead (:data:`CONSTRAINED`).
+
+A component with modes names its twin in ``smooth_twin``;
+:func:`smooth_names` turns any structure into its smooth twin.
 """
 
 from __future__ import annotations
 
 import casadi as ca
 
-from .base import register
+from ..errors import ModelError
+from .base import REGISTRY, register
 from .kiln import Burden
 from .drivetrain import Mesh
 from .ramps import softplus
 
-__all__ = ["MeshSmooth", "BurdenSmooth", "SMOOTH_DS", "SMOOTH_V", "STRIBECK_RATIO"]
+__all__ = ["MeshSmooth", "BurdenSmooth", "SMOOTH_DS", "SMOOTH_V", "STRIBECK_RATIO", "CONSTRAINED", "smooth_names"]
 
 #: default penetration width of the smoothed backlash [m]
 SMOOTH_DS = 1e-6
@@ -54,6 +58,47 @@ SMOOTH_DS = 1e-6
 SMOOTH_V = 1e-4
 #: Stribeck speed over the friction width (``friction_law = 'torque'``) [-]
 STRIBECK_RATIO = 10.0
+
+
+#: components with modes that a smooth model leaves out: the optimizer keeps the unlimited voltage and current
+#: within V_max and I_max as constraints instead
+CONSTRAINED = ("voltage_limit", "current_limit")
+
+
+def smooth_names(names) -> tuple[str, ...]:
+    """The smooth twin of a structure: each component with modes replaced by its ``smooth_twin``.
+
+    The drive limits (:data:`CONSTRAINED`) are left out and the ``ramp``
+    (whose modes a profile's smooth reference overrides) is kept; the order
+    is kept, a twin taking its component's place.
+
+    Parameters
+    ----------
+    names : sequence of str
+        Component names of a hybrid structure.
+
+    Returns
+    -------
+    tuple of str
+        Component names without modes (besides the ramp's).
+
+    Raises
+    ------
+    ModelError
+        A component with modes that has no smooth twin (named).
+    """
+    out = []
+    for nm in names:
+        comp = REGISTRY[nm]
+        if nm in CONSTRAINED:
+            continue
+        if comp.modes and nm != "ramp":
+            if not comp.smooth_twin:
+                raise ModelError(f"component {nm!r} has modes {comp.modes} and no smooth twin (its class sets no "
+                                 "smooth_twin), so a smooth model cannot carry it")
+            nm = comp.smooth_twin
+        out.append(nm)
+    return tuple(out)
 
 
 def _smax0(x, width):
@@ -78,6 +123,7 @@ class MeshSmooth(Mesh):
     summary = "gear mesh with backlash, dead zone smoothed over smooth_ds [m]"
     replaces = ("mesh",)
     modes = ()
+    smooth_twin = None
 
     def declare(self, spec):
         super().declare(spec)
@@ -124,6 +170,7 @@ class BurdenSmooth(Burden):
     summary = "burden with wall friction mu*N*R*tanh(v_rel/smooth_v)"
     replaces = ("burden",)
     modes = ()
+    smooth_twin = None
 
     def declare(self, spec):
         super().declare(spec)

@@ -22,10 +22,12 @@ import casadi as ca
 import numpy as np
 
 from ..errors import ModelError, OptimizationError
+from ..model import MODELS, REGISTRY, phase_rank
 from ..model.assembly import Plant
-from ..model.base import OPTION_NAMES
-from ..model.kiln import BEARING_OMEGA_EPS
-from ..model.smooth import SMOOTH_DS, SMOOTH_V
+from ..model.base import option_names
+from ..model.drivetrain import lewis_stress
+from ..model.kiln import bearing_torque
+from ..model.smooth import SMOOTH_DS, SMOOTH_V, smooth_names
 from ..params import Parameters
 from .problem import Profile
 
@@ -37,55 +39,59 @@ RETRY_TIGHTEN = (1.0, 0.1)
 #: output rows of the smooth model
 OUTPUTS = ("sigma", "sigma_dyn", "i_a", "e_a", "speed_rpm")
 
-#: the micro model's components that are smooth already, in phase order (limits left out)
-_SMOOTH_CORE = ("pid", "dc_motor", "coupling", "pinion", "mesh_smooth", "kiln", "bearing_friction",
-                "burden_smooth", "bending_stress")
-#: the paper's micro model (hybrid), from kilnctl.model.MODELS['micro']
-_HYBRID_CORE = ("pid", "voltage_limit", "dc_motor", "current_limit", "coupling", "pinion", "mesh", "kiln",
-                "bearing_friction", "burden", "bending_stress")
+#: the paper's micro model (hybrid) without its ramp, from kilnctl.model.MODELS['micro']
+_HYBRID_CORE = tuple(c for c in MODELS["micro"] if c != "ramp")
+#: its smooth twin: each component with modes replaced by its smooth twin, the drive limits left out (they
+#: become constraints), see kilnctl.model.smooth.smooth_names
+_SMOOTH_CORE = smooth_names(_HYBRID_CORE)
 
 
 def check_effects(effects) -> tuple[str, ...]:
-    """Effects the ramp optimization can carry: components without modes (smooth as they are).
+    """Effects the ramp optimization can carry: components without modes, or with a smooth twin.
+
+    The smooth model uses each effect's smooth twin where it has modes (:func:`smooth_components`), the
+    hybrid verification the effect itself (:func:`hybrid_components`).
 
     Parameters
     ----------
     effects : sequence of str
-        Component names (``second_motor``, ``speed_sensor_lag``, ``kiln_unbalance``, ``viscous_drag``).
+        Component names (``second_motor``, ``speed_sensor_lag``, ``kiln_unbalance``, ``viscous_drag``,
+        ``motor_coulomb_friction`` ...).
 
     Returns
     -------
     tuple of str
+        The names, each once.
 
     Raises
     ------
     ModelError
-        An unknown component, or one with modes (it has no smooth twin for the optimizer).
+        An unknown component, one with modes and no smooth twin, or one that replaces another.
     """
     from ..errors import close_matches_hint
-    from ..model import REGISTRY
 
     out = []
     for e in effects:
         if e not in REGISTRY:
             raise ModelError(f"effect {e!r} is not a component: {close_matches_hint(e, REGISTRY)}")
         comp = REGISTRY[e]
-        if comp.modes or comp.replaces:
+        if (comp.modes and not comp.smooth_twin) or comp.replaces:
+            twins = {c.smooth_twin for c in REGISTRY.values()}
+            base = {n for names in MODELS.values() for n in names}
+            usable = sorted(n for n, c in REGISTRY.items() if n not in base and n not in twins
+                            and not c.replaces and (not c.modes or c.smooth_twin) and not n.startswith("ramp_"))
             raise ModelError(f"effect {e!r} cannot be added to the ramp optimization: it "
-                             + ("has modes and no smooth twin" if comp.modes else f"replaces {comp.replaces}")
-                             + "; the mode-free effects can (second_motor, speed_sensor_lag, kiln_unbalance, "
-                               "viscous_drag)")
+                             + ("has modes and no smooth twin" if comp.modes and not comp.smooth_twin
+                                else f"replaces {comp.replaces}")
+                             + f"; the mode-free effects and those with a smooth twin can: {', '.join(usable)}")
         if e not in out:
             out.append(e)
     return tuple(out)
 
 
 def _with(core, effects):
-    from ..model import ORDER
-
     names = list(core) + [e for e in effects if e not in core]
-    return tuple(sorted(names, key=lambda c: ORDER.index(c) if c in ORDER else ORDER.index(c.rsplit("_smooth", 1)[0])
-                        if c.endswith("_smooth") and c.rsplit("_smooth", 1)[0] in ORDER else len(ORDER)))
+    return tuple(sorted(names, key=phase_rank))
 
 
 def smooth_components(profile: Profile, effects=()) -> tuple[str, ...]:
@@ -95,7 +101,7 @@ def smooth_components(profile: Profile, effects=()) -> tuple[str, ...]:
     ----------
     profile : Profile
     effects : sequence of str
-        Mode-free effects to add (see :func:`check_effects`).
+        Effects to add (see :func:`check_effects`); one with modes enters as its smooth twin.
 
     Returns
     -------
@@ -103,7 +109,7 @@ def smooth_components(profile: Profile, effects=()) -> tuple[str, ...]:
         ``ramp``, the profile's smooth reference component, then the smooth
         micro model without the drive limits, with the effects.
     """
-    return ("ramp", profile.smooth_component) + _with(_SMOOTH_CORE, check_effects(effects))
+    return ("ramp", profile.smooth_component) + _with(_SMOOTH_CORE, smooth_names(check_effects(effects)))
 
 
 def hybrid_components(profile: Profile, effects=()) -> tuple[str, ...]:
@@ -113,7 +119,7 @@ def hybrid_components(profile: Profile, effects=()) -> tuple[str, ...]:
     ----------
     profile : Profile
     effects : sequence of str
-        Mode-free effects to add (see :func:`check_effects`).
+        Effects to add (see :func:`check_effects`), as they are.
 
     Returns
     -------
@@ -149,12 +155,8 @@ def load_stress(T_f, omega_kiln, p, tanh=np.tanh, fabs=np.abs):
     array or casadi.SX
         Load stress [Pa].
     """
-    Kv = 1.0
-    if p.dynamic_factor == "barth":
-        Kv = (6.1 + p.R_o * fabs(omega_kiln)) / 6.1
-    T_load = T_f + p.T_brg * tanh(omega_kiln / BEARING_OMEGA_EPS)
-    return T_load / p.R_o * Kv / (p.face_width * p.module * p.Y_lewis)
-
+    T_load = T_f + bearing_torque(omega_kiln, p, tanh)
+    return lewis_stress(T_load / p.R_o, omega_kiln, p, fabs)
 
 class SmoothStartup:
     """Smooth micro model of the start-up for one profile family and option set.
@@ -182,7 +184,7 @@ class SmoothStartup:
 
     def __init__(self, profile: Profile, params: Parameters, rtol: float = 1e-8, atol: float = 1e-8, effects=()):
         self.profile = profile
-        self.options = {k: params[k] for k in OPTION_NAMES}
+        self.options = {k: params[k] for k in option_names()}
         self.plant = Plant(smooth_components(profile, effects), self.options, compile=False)
         if [c.name for c in self.plant.moded] != ["ramp"]:
             raise ModelError("the smooth start-up model must have no modes besides the ramp's")

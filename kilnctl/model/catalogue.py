@@ -1,0 +1,220 @@
+"""Catalogue entries: how a component tells the diagnosis what it explains and how to fit it.
+
+A component of :mod:`kilnctl.model` lists in its ``catalogue`` the
+:class:`Effect` entries it stands for (``second_motor`` ... ``backlash`` for
+``mesh``, ``torque_friction_law`` for ``burden``);
+:data:`kilnctl.measure.effects.CATALOGUE` is derived from the registry.  The
+fitted parameters are :class:`FreeParameter` declarations (bounds, scaling).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Callable
+
+from ..params import SPECS, Parameters
+
+__all__ = ["FreeParameter", "Effect"]
+
+
+@dataclass(frozen=True)
+class FreeParameter:
+    """A parameter to calibrate, with its bounds and how it is scaled for the optimizer.
+
+    Attributes
+    ----------
+    name : str
+        Model parameter (:data:`kilnctl.params.SPECS`).
+    lower, upper : float
+        Bounds [unit of the parameter].
+    kind : {'lin', 'log', 'polar'}
+        ``lin``: the optimizer sees value/typical; ``log``: ln(value/typical)
+        (for parameters spanning decades; lower must be > 0); ``polar``:
+        an amplitude fitted with its phase ``partner`` as the Cartesian pair
+        (a, b) = (A cos phi, A sin phi), which is linear in the torque and
+        has no wrap-around.
+    typical : float
+        Scale [unit] (order of magnitude of the value).
+    partner : str, optional
+        Phase parameter [rad] of a ``polar`` amplitude.
+    """
+
+    name: str
+    lower: float
+    upper: float
+    kind: str = "lin"
+    typical: float = 1.0
+    partner: str | None = None
+
+    @property
+    def unit(self) -> str:
+        """Unit of the parameter (from its declaration)."""
+        return SPECS[self.name].unit if self.name in SPECS else ""
+
+
+
+@dataclass(frozen=True)
+class Effect:
+    """One physical effect of the catalogue.
+
+    Attributes
+    ----------
+    name : str
+        Catalogue name.
+    meaning : str
+        The physics, in one or two sentences.
+    components : tuple of str
+        Model components it adds (:data:`kilnctl.model.REGISTRY`).
+    options : dict
+        Parameter options it sets (e.g. ``friction_law = 'torque'``).
+    model : str or None
+        Model it needs (``micro`` for backlash), None for any.
+    parameters : tuple of FreeParameter
+        What is fitted when it is added (on top of the base parameters).
+    signature : str
+        The residual pattern it explains.
+    starts : callable
+        ``starts(params, measurement) -> list of dict``: initial guesses
+        added to the grid of :func:`grid_starts` (the best of all by cost is
+        the starting point of the local fit).
+    plausible : dict
+        Usual range of each parameter in real drives [unit]: it adds
+        starting points, is reported when a fitted value lies outside it
+        (:meth:`plausibility`), and draws the magnitudes of synthetic records;
+        it is never a fitting bound and never decides which effect is
+        selected.
+    notes : str
+        How it is handled (e.g. the micro model for backlash).
+    horizons : tuple of float or 'after_first_failure'
+        Growing fitting horizons (fractions of the record) used when it is
+        refitted (see :meth:`~kilnctl.measure.calibrate.Calibration.fit`);
+        ``after_first_failure``: first up to 1 s after the current model's
+        first failing interval, then longer by 10 % of the record at a time.
+    grid_points : int
+        Points of the coarse start grid per parameter.
+    separation : float
+        Least scaled distance between the starting points of the local fits
+        (small where the cost has narrow parallel valleys).
+    smoothing : tuple of float
+        Moving-average widths of the residual [s] on which the starting
+        points are compared and each local fit begins, widest first (see
+        :meth:`~kilnctl.measure.calibrate.Calibration.fit`): for effects whose
+        trace is a short event or a jump whose time depends on the
+        parameters.  Every refit of a structure with the effect uses them.
+    period : callable or None
+        ``period(params, omega_ref) -> float``: the period of the effect's
+        signature [s] when it is periodic.  In a record shorter than that
+        the signature is only part of a cycle, which other causes also
+        produce; the diagnosis then adds ``short_record_note`` as a caution.
+    short_record_note : str
+        What else makes the signature in such a short record.
+    relative_plausible : tuple of str
+        Parameters whose ``plausible`` range is not in their own unit
+        (skipped by :meth:`plausibility`).
+    null : dict or None
+        Values of its parameters at which the effect vanishes (or nearly:
+        a lag of 0.1 ms), so that the structure with it contains the one
+        without it; a refit starts there too and is then never worse than
+        the current model.  None when there is no such point in the bounds
+        (a rigid drive train is the limit of infinite stiffness).
+    """
+
+    name: str
+    meaning: str
+    components: tuple
+    options: dict
+    model: str | None
+    parameters: tuple
+    signature: str
+    starts: Callable = field(repr=False, default=lambda params, m: [{}])
+    plausible: dict = field(default_factory=dict)
+    notes: str = ""
+    horizons: tuple = (1.0,)
+    grid_points: int = 24
+    separation: float = 1.0
+    smoothing: tuple = (0.0,)
+    period: Callable | None = field(repr=False, default=None)
+    short_record_note: str = ""
+    null: dict | None = None
+    relative_plausible: tuple = ()
+
+    def applicable(self, params: Parameters, model: str) -> str | None:
+        """Return None if the effect can be added to this base, else the reason it cannot.
+
+        Parameters
+        ----------
+        params : Parameters
+            Base parameters (options).
+        model : str
+            Base model.
+
+        Returns
+        -------
+        str or None
+        """
+        for k, v in self.options.items():
+            if params[k] == v:
+                return f"the base already has {k} = {v!r}"
+        return None
+
+    def plausibility(self, values: dict) -> list[str]:
+        """Say in words which fitted values lie outside the usual range of real drives.
+
+        The ranges (:attr:`plausible`) only describe typical kilns: a value
+        outside one is reported, never refused, and never decides which
+        effect is selected.  Ranges that are not in the parameter's own unit
+        (``I_max`` as a fraction of the peak current) and phases are skipped.
+
+        Parameters
+        ----------
+        values : dict of str to float
+            Fitted values [unit of each parameter].
+
+        Returns
+        -------
+        list of str
+            E.g. ``"J_m2 = 8 kg*m^2, below the usual 10-45 kg*m^2"``.
+        """
+        out = []
+        for name, (lo, hi) in self.plausible.items():
+            if name not in values or name.startswith("phi") or name in self.relative_plausible:
+                continue
+            v = float(values[name])
+            unit = SPECS[name].unit if name in SPECS else ""
+            unit = "" if unit in ("-", "") else " " + unit
+            if v < lo:
+                out.append(f"{name} = {v:.3g}{unit}, below the usual {lo:g}-{hi:g}{unit}")
+            elif v > hi:
+                out.append(f"{name} = {v:.3g}{unit}, above the usual {lo:g}-{hi:g}{unit}")
+        return out
+
+    def usual_starts(self) -> list[dict]:
+        """Starting points from the usual ranges: each end, their middle, 0.3 x the lower and 3 x the upper end.
+
+        The usual range guides the search; the bounds stay wide, so a value outside it is found too.
+
+        Returns
+        -------
+        list of dict
+            One parameter varied at a time [unit of each]; ranges not in the parameter's own unit, and
+            phases, are skipped.
+        """
+        out = []
+        for name, (lo, hi) in self.plausible.items():
+            if name.startswith("phi") or name in self.relative_plausible:
+                continue
+            mid = math.sqrt(lo * hi) if lo > 0 else 0.5 * (lo + hi)
+            fp = next((f for f in self.parameters if f.name == name), None)
+            for v in (0.3 * lo, lo, mid, hi, 3.0 * hi):
+                if fp is None or fp.lower <= v <= fp.upper:
+                    out.append({name: float(v)})
+        return out
+
+    def to_dict(self) -> dict:
+        """Return the entry as a JSON-ready dictionary."""
+        return {"name": self.name, "meaning": self.meaning, "components": list(self.components),
+                "options": dict(self.options), "model": self.model, "signature": self.signature,
+                "parameters": [{"name": p.name, "unit": p.unit, "lower": p.lower, "upper": p.upper,
+                                "scale": p.kind} for p in self.parameters],
+                "plausible": {k: list(v) for k, v in self.plausible.items()}, "notes": self.notes}
