@@ -42,16 +42,21 @@ def test_every_catalogue_effect_is_declared(name):
         assert k in SPECS and SPECS[k].choices, f"effect {name!r} sets option {k!r}, not a declared option"
 
 
+def _structure(name):
+    """Components and parameters of the catalogue effect ``name`` on the model it needs."""
+    from kilnctl.measure.effects import effect_components
+
+    model = CATALOGUE[name].model or "macro"
+    extra, params = effect_components([name], Parameters(), model)
+    return component_names(model, extra), params
+
+
 @pytest.mark.parametrize("name", sorted(CATALOGUE))
 def test_every_catalogue_effect_simulates_and_linearizes(name):
     from kilnctl.linearize import linearize
-    from kilnctl.measure.effects import effect_components
     from kilnctl.simulate import simulate
 
-    eff = CATALOGUE[name]
-    model = eff.model or "macro"
-    extra, params = effect_components([name], Parameters(), model)
-    comps = component_names(model, extra)
+    comps, params = _structure(name)
     r = simulate(params, components=comps, t_end=10.0)
     assert np.all(np.isfinite(r["i_a"])) and r.t[-1] == pytest.approx(10.0)
     lin = linearize(params, components=comps, t_op=10.0)
@@ -126,15 +131,11 @@ def test_every_catalogue_effect_smooths(name):
     # the smooth twin of the structure with the effect has no modes besides the ramp's and runs a start-up;
     # truth: the hybrid structure itself, whose speed at the end of the ramp the twin must reach within 2 %
     # (the smoothing widths are 1 um of mesh penetration and 1e-4 rad/s of burden creep)
-    from kilnctl.measure.effects import effect_components
     from kilnctl.model import get_plant
     from kilnctl.model.smooth import smooth_names
     from kilnctl.simulate import simulate
 
-    eff = CATALOGUE[name]
-    model = eff.model or "macro"
-    extra, params = effect_components([name], Parameters(), model)
-    hybrid = component_names(model, extra)
+    hybrid, params = _structure(name)
     smooth = smooth_names(hybrid)
     assert [c.name for c in get_plant(smooth, params).moded] == ["ramp"]
     rs = simulate(params, components=smooth, t_end=8.0)

@@ -32,14 +32,14 @@ def bearing_torque(omega_kiln, p, tanh=ca.tanh):
     omega_kiln : casadi.SX or array
         Kiln speed [rad/s].
     p : Parameters or SymParams
-        Parameters (numeric or symbolic).
+        ``T_brg`` is read from it.
     tanh : callable, default casadi.tanh
-        Hyperbolic tangent matching the arguments (``numpy.tanh`` for arrays).
+        ``numpy.tanh`` for numeric arrays.
 
     Returns
     -------
     casadi.SX or array
-        Torque [N*m]; the kiln receives its negative.
+        Friction torque [N*m] (positive while the kiln turns forward); the kiln receives its negative.
     """
     return p.T_brg * tanh(omega_kiln / BEARING_OMEGA_EPS)
 
