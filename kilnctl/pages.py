@@ -1,6 +1,6 @@
 """One-page HTML reports of ``kilnctl verify`` and ``kilnctl optimize-ramp``.
 
-The same layout as the measurement reports (:mod:`kilnctl.measure.report`):
+The same layout as the measurement reports (:func:`kilnctl.measure.report.report_page`):
 a plain-language headline, a "how to read this" box, the numbers as small
 tables with units, the figure, the settings; self-contained (the figure is
 embedded), written whole or not at all.
@@ -8,10 +8,9 @@ embedded), written whole or not at all.
 
 from __future__ import annotations
 
-import io
 import math
 
-from .measure.report import esc, figure_block, how_to_read, page, settings_table, table, write_report_files
+from .measure.report import esc, figure_block, report_page, table, write_page_files
 
 __all__ = ["verify_html", "write_verify_report", "ramp_html", "write_ramp_report"]
 
@@ -67,22 +66,20 @@ def verify_html(v, fig=None) -> str:
     """
     fig = fig or v.plot()
     g = v.params
-    parts = [f'<p class="big">{esc(verify_headline(v))}</p>', how_to_read(("linear",))]
     rows = []
     for r in v.table():
         label, unit, f = _VERIFY_ROWS.get(r["quantity"], (r["quantity"], "", "{:.3g}"))
         rows.append((label, unit, _fmt(r["linear_stick"], f), _fmt(r["linear_slip"], f), _fmt(r["nonlinear"], f)))
-    parts.append("<h2>Linear design against the nonlinear plant</h2>"
-                 + table(["quantity", "unit", "linear, stick inertia", "linear, slip inertia",
-                          f"nonlinear {v.nonlinear.model} model"], rows, left=2))
-    parts.append("<h2>Where and why they part</h2><ul>" + "".join(f"<li>{esc(r)}</li>" for r in v.reasons)
-                 + "</ul>")
-    parts.append("<h2>Speed and current</h2>" + figure_block(fig, "speed and current, linear and nonlinear"))
-    parts.append("<h2>Settings</h2>" + settings_table(
-        {"k_p [V/rpm]": f"{g.k_p:.4g}", "k_I [V/(rpm·s)]": f"{g.k_I:.4g}", "k_D [V·s/rpm]": f"{g.k_D:.4g}",
-         "model": v.nonlinear.model, "ramp [rpm/s]": g.ramp_rate, "set point [rpm]": g.omega_ref,
-         "simulated [s]": float(v.nonlinear.t[-1])}))
-    return page("Speed-loop design verified on the nonlinear plant", "\n".join(parts))
+    parts = ["<h2>Linear design against the nonlinear plant</h2>"
+             + table(["quantity", "unit", "linear, stick inertia", "linear, slip inertia",
+                      f"nonlinear {v.nonlinear.model} model"], rows, left=2),
+             "<h2>Where and why they part</h2><ul>" + "".join(f"<li>{esc(r)}</li>" for r in v.reasons) + "</ul>",
+             "<h2>Speed and current</h2>" + figure_block(fig, "speed and current, linear and nonlinear")]
+    return report_page(
+        "Speed-loop design verified on the nonlinear plant", verify_headline(v), parts, terms=("linear",),
+        settings={"k_p [V/rpm]": f"{g.k_p:.4g}", "k_I [V/(rpm·s)]": f"{g.k_I:.4g}", "k_D [V·s/rpm]": f"{g.k_D:.4g}",
+                  "model": v.nonlinear.model, "ramp [rpm/s]": g.ramp_rate, "set point [rpm]": g.omega_ref,
+                  "simulated [s]": float(v.nonlinear.t[-1])})
 
 
 def write_verify_report(v, folder, protect=()) -> list:
@@ -102,10 +99,7 @@ def write_verify_report(v, folder, protect=()) -> list:
     list of Path
     """
     fig = v.plot()
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110)
-    return write_report_files(folder, {"verify.html": verify_html(v, fig), "verify.json": v.to_dict(),
-                                       "verify.png": buf.getvalue()}, protect=protect)
+    return write_page_files(folder, "verify", verify_html(v, fig), v.to_dict(), {"verify.png": fig}, protect)
 
 
 def ramp_html(result, fig=None) -> str:
@@ -132,10 +126,6 @@ def ramp_html(result, fig=None) -> str:
     prob = result.problem
     head = result.headline()
     head = head[0].upper() + head[1:] + "."
-    parts = [f'<p class="big">{esc(head)}</p>']
-    for f in result.flags:
-        parts.append(f'<p class="warn"><b>Flag:</b> {esc(f)}</p>')
-    parts.append(how_to_read(("objective", "ramp")))
     mpa = lambda v: "-" if v is None else f"{v / 1e6:.1f}"  # noqa: E731
     rows = [("dynamic stress (above the running load)", "MPa", mpa(s["dynamic_stress_predicted_Pa"]),
              mpa(s["dynamic_stress_verified_Pa"]), mpa(s["baseline_dynamic_stress_Pa"])),
@@ -146,25 +136,25 @@ def ramp_html(result, fig=None) -> str:
     tts = s["time_to_speed_s"]
     rows.append((f"time to {100 * prob.speed_fraction:g} % speed", "s", "-",
                  "not reached" if tts is None else f"{tts:.2f}", "-"))
-    parts.append(f"<h2>The ramp found: {esc(_ramp_text(s['ramp']))}</h2>"
-                 + table(["quantity", "unit", "predicted (smooth model)", "verified (hybrid plant)",
-                          f"baseline ({s['baseline_ramp']:g} rpm/s)"], rows, left=2, selected={0}))
+    parts = [f"<h2>The ramp found: {esc(_ramp_text(s['ramp']))}</h2>"
+             + table(["quantity", "unit", "predicted (smooth model)", "verified (hybrid plant)",
+                      f"baseline ({s['baseline_ramp']:g} rpm/s)"], rows, left=2, selected={0})]
     if s["running_stress_Pa"] is not None:
         parts.append(f"<p>Running load of the burden at its angle: {s['running_stress_Pa'] / 1e6:.1f} MPa. "
                      f"Prediction and verification agree to {abs(s['agreement_pct']):.2f} % "
                      f"(tolerance {s['tolerance_pct']:g} %).</p>")
     parts.append("<h2>Reference, stress and current</h2>"
                  + figure_block(fig, "ramp, stress and current against the baseline"))
-    for n in result.notes:
-        parts.append(f"<p>Note: {esc(n)}</p>")
-    parts.append("<h2>Settings</h2>" + settings_table(
-        {"profile": s["profile"], "objective": s["objective"], "t_max [s]": prob.t_max,
-         "horizon [s]": prob.horizon, "robust": "yes" if prob.robust else "no (nominal parameters)",
-         "transcription": s["transcription"], "solver": f"IPOPT {s['solver_status']}, {s['iterations']} iterations"},
-        {"objective": OBJECTIVE_WORDS[s["objective"]],
-         "t_max [s]": f"the motor must reach {100 * prob.speed_fraction:g} % of its set point by then",
-         "horizon [s]": "simulated start-up"}))
-    return page("Start-up ramp optimization", "\n".join(parts))
+    return report_page(
+        "Start-up ramp optimization", head, parts, warnings=[("Flag", f) for f in result.flags],
+        terms=("objective", "ramp"), notes=result.notes,
+        settings={"profile": s["profile"], "objective": s["objective"], "t_max [s]": prob.t_max,
+                  "horizon [s]": prob.horizon, "robust": "yes" if prob.robust else "no (nominal parameters)",
+                  "transcription": s["transcription"],
+                  "solver": f"IPOPT {s['solver_status']}, {s['iterations']} iterations"},
+        meanings={"objective": OBJECTIVE_WORDS[s["objective"]],
+                  "t_max [s]": f"the motor must reach {100 * prob.speed_fraction:g} % of its set point by then",
+                  "horizon [s]": "simulated start-up"})
 
 
 def write_ramp_report(result, folder, protect=()) -> list:
@@ -186,8 +176,5 @@ def write_ramp_report(result, folder, protect=()) -> list:
     from matplotlib.figure import Figure
 
     fig = result.plot(fig=Figure(figsize=(10, 8.5)))
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110)
-    return write_report_files(folder, {"optimize_ramp.html": ramp_html(result, fig),
-                                       "optimize_ramp.json": result.summary(),
-                                       "optimize_ramp.png": buf.getvalue()}, protect=protect)
+    return write_page_files(folder, "optimize_ramp", ramp_html(result, fig), result.summary(),
+                            {"optimize_ramp.png": fig}, protect)

@@ -217,9 +217,7 @@ def oscillation(t, y, t_from: float) -> tuple[float, float | None]:
     freq : float or None
         Frequency [Hz]; None with fewer than two upward crossings.
     """
-    t, y = np.asarray(t, float), np.asarray(y, float)
-    m = t >= t_from
-    tw, yw = t[m], y[m]
+    tw, yw = _window(t, y, t_from)
     if len(tw) < 3:
         return 0.0, None
     d = yw - np.mean(yw)
@@ -254,9 +252,15 @@ def window_peak(t, y, t0: float, t1: float) -> tuple[float, float]:
     KilnctlError
         When no sample falls in the window.
     """
-    t, y = np.asarray(t, float), np.asarray(y, float)
-    m = np.nonzero((t >= t0) & (t <= t1))[0]
-    if len(m) == 0:
+    tw, yw = _window(t, y, t0, t1)
+    if len(tw) == 0:
         raise KilnctlError(f"no sample in the window [{t0}, {t1}] s")
-    k = m[np.argmax(np.abs(y[m]))]
-    return float(abs(y[k])), float(t[k])
+    k = np.argmax(np.abs(yw))
+    return float(abs(yw[k])), float(tw[k])
+
+
+def _window(t, y, t0: float, t1: float = np.inf):
+    """The samples of a signal with ``t0 <= t <= t1``, as float arrays ``(t, y)``."""
+    t, y = np.asarray(t, float), np.asarray(y, float)
+    m = (t >= t0) & (t <= t1)
+    return t[m], y[m]

@@ -12,7 +12,6 @@ def register(sub) -> None:
     Parameters
     ----------
     sub : argparse._SubParsersAction
-        The subparsers of the ``kilnctl`` parser.
     """
     p = add_command(
         sub, "params", run, help="print the parameter set with units and sources",

@@ -15,7 +15,6 @@ def register(sub) -> None:
     Parameters
     ----------
     sub : argparse._SubParsersAction
-        The subparsers of the ``kilnctl`` parser.
     """
     p = add_command(
         sub, "verify", run, help="run the designed gains on the nonlinear plant and compare with the design",

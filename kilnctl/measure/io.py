@@ -347,14 +347,9 @@ def read_csv(path, params: Parameters | None = None, columns=None) -> Measuremen
         channel whose scale suggests the wrong unit.  The message names the
         file, the line and the column.
     """
-    from .tables import _read_text
+    from .tables import read_table
 
-    path = Path(path)
-    if path.is_dir():
-        raise DataError(f"{path}: is a folder, not a measurement file")
-    if not path.exists():
-        raise DataError(f"{path}: no such measurement file")
-    return _interpret(_read_text(path), params, columns)
+    return _interpret(read_table(path, "csv"), params, columns)
 
 
 def read_record(path, params: Parameters | None = None, columns=None, *, log: bool = False) -> Measurement:

@@ -26,7 +26,8 @@ __all__ = ["figure_tag", "table", "page", "write_report_files", "esc", "json_num
            "diagnosis_dict", "diagnosis_headline", "diagnosis_summary", "plot_diagnosis", "plot_ranking",
            "diagnosis_html", "write_diagnosis_report", "write_comparison_report", "comparison_html",
            "diagnosis_plain_headline", "uncertainty_words", "how_to_read", "settings_table", "parameter_table",
-           "figure_block", "record_name_of", "HOW_TO_READ", "pretty_unit", "value_pair"]
+           "figure_block", "record_name_of", "HOW_TO_READ", "pretty_unit", "value_pair", "png_bytes", "write_page_files",
+           "report_page"]
 
 _CSS = """
 *{box-sizing:border-box}
@@ -68,10 +69,27 @@ def figure_tag(fig, alt: str = "figure") -> str:
     -------
     str
     """
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=90)
-    data = base64.b64encode(buf.getvalue()).decode("ascii")
+    data = base64.b64encode(png_bytes(fig, dpi=90)).decode("ascii")
     return f'<img alt="{esc(alt)}" src="data:image/png;base64,{data}">'
+
+
+def png_bytes(fig, dpi: float = 110) -> bytes:
+    """Return a figure as PNG file content.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure.
+    dpi : float, default 110
+        Resolution [dots per inch].
+
+    Returns
+    -------
+    bytes
+    """
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=dpi)
+    return buf.getvalue()
 
 
 def table(header, rows, left=1, selected=(), wrap=()) -> str:
@@ -161,6 +179,36 @@ def write_report_files(folder, files: dict, protect=()) -> list[Path]:
             content = json.dumps(content, indent=2, allow_nan=False)
         written.append(write_atomic(path, content))
     return written
+
+
+def write_page_files(folder, stem: str, html_text: str, data: dict, figures: dict, protect=(), dpi: float = 110
+                     ) -> list[Path]:
+    """Write a report page ``STEM.html``, its numbers ``STEM.json`` and its figures as PNG, each whole or not at all.
+
+    Parameters
+    ----------
+    folder : path-like
+        Destination folder (created).
+    stem : str
+        Name of the page and of its JSON file, without the extension.
+    html_text : str
+        The page (:func:`report_page`).
+    data : dict
+        JSON-ready numbers of the page.
+    figures : dict of str to matplotlib.figure.Figure
+        PNG file name -> figure.
+    protect : sequence of path-like
+        Input files never to overwrite.
+    dpi : float, default 110
+        Resolution of the PNG files [dots per inch].
+
+    Returns
+    -------
+    list of Path
+        The page, the JSON file, then the figures.
+    """
+    pngs = {name: png_bytes(fig, dpi) for name, fig in figures.items()}
+    return write_report_files(folder, {f"{stem}.html": html_text, f"{stem}.json": data, **pngs}, protect=protect)
 
 
 # --- shared formatting -----------------------------------------------------------------------------
@@ -277,13 +325,15 @@ def _jsonable(d):
     return out
 
 
-def _effect_params(effect):
-    out = set()
-    for fp in CATALOGUE[effect].parameters:
-        out.add(fp.name)
-        if fp.partner:
-            out.add(fp.partner)
-    return out
+def _effect_params(effect) -> tuple[str, ...]:
+    """The parameters an effect brings (each with its partner), in catalogue order."""
+    return tuple(dict.fromkeys(k for fp in CATALOGUE[effect].parameters for k in (fp.name, fp.partner) if k))
+
+
+def _fitted_effect_params(d):
+    """``(effect, parameter)`` of every selected effect's parameter the final calibration fitted."""
+    fitted = d.final_calibration_.values_
+    return [(e, k) for e in d.selected_ for k in _effect_params(e) if k in fitted]
 
 
 def _params_dict(cal) -> dict:
@@ -348,12 +398,8 @@ def diagnosis_headline(d) -> str:
             s += f"; the residual still has structure ({d.unexplained_['hint']})"
         return s
     fc = d.final_calibration_
-    parts = []
-    for e in d.selected_:
-        for fp in CATALOGUE[e].parameters:
-            for k in (fp.name, fp.partner):
-                if k and k in fc.values_:
-                    parts.append(f"{k} = {_fmt_val(fc.values_[k], fc.stderr_[k])} {unit_of(k)}".rstrip())
+    parts = [f"{k} = {_fmt_val(fc.values_[k], fc.stderr_[k])} {unit_of(k)}".rstrip()
+             for _, k in _fitted_effect_params(d)]
     return (f"current fit rose from {c0:.1f} % to {c1:.1f} % after adding {', '.join(d.selected_)}"
             + (f", {', '.join(parts)}" if parts else ""))
 
@@ -502,15 +548,10 @@ def diagnosis_plain_headline(d) -> str:
             s += f" The residual still has structure the catalogue does not explain: {d.unexplained_['hint']}."
         return s
     fc = d.final_calibration_
-    found = []
-    for e in d.selected_:
-        vals = []
-        for fp in CATALOGUE[e].parameters:
-            for k in (fp.name, fp.partner):
-                if k and k in fc.values_:
-                    words = _value_words(fc.values_[k], fc.stderr_[k], k in fc.not_identifiable_, unit_of(k))
-                    vals.append(f"{k} = {words}")
-        found.append(_effect_words(e) + (f" ({', '.join(vals)})" if vals else ""))
+    vals: dict = {e: [] for e in d.selected_}
+    for e, k in _fitted_effect_params(d):
+        vals[e].append(f"{k} = {_value_words(fc.values_[k], fc.stderr_[k], k in fc.not_identifiable_, unit_of(k))}")
+    found = [_effect_words(e) + (f" ({', '.join(v)})" if v else "") for e, v in vals.items()]
     effects = found[0] if len(found) == 1 else ", ".join(found[:-1]) + " and " + found[-1]
     s = (f"Missing from the model: {effects}. With {'it' if len(found) == 1 else 'them'} the current fit rose "
          f"from {c0:.1f} % to {c1:.1f} %.")
@@ -699,6 +740,53 @@ def figure_block(fig, alt: str, caption: str = "") -> str:
     return figure_tag(fig, alt) + (f'<p class="cap">{esc(caption)}</p>' if caption else "")
 
 
+def report_page(title: str, headline: str, body, *, warnings=(), terms=(), values=None, notes=(), settings=None,
+                meanings=None) -> str:
+    """Return a report in the layout every kilnctl report page shares, as one self-contained HTML page.
+
+    The layout: the headline in plain words, warnings, the "how to read this" box, the body
+    (numbers as small tables with units, figures), notes, and the settings as a table.
+
+    Parameters
+    ----------
+    title : str
+        Page title.
+    headline : str
+        The result in one or two plain sentences.
+    body : sequence of str
+        HTML sections, in order.
+    warnings : sequence of (str, str)
+        ``(label, text)`` of each warning (``("Caution", "...")``).
+    terms : sequence of str
+        Terms of :data:`HOW_TO_READ` to explain.
+    values : dict, optional
+        Numbers the explanations name (see :func:`how_to_read`).
+    notes : sequence of str
+        Notes after the body.
+    settings : dict, optional
+        Setting name -> value (:func:`settings_table`).
+    meanings : dict, optional
+        Setting name -> what it means.
+
+    Returns
+    -------
+    str
+    """
+    parts = [f'<p class="big">{esc(headline)}</p>']
+    parts += [f'<p class="warn"><b>{esc(label)}:</b> {esc(text)}</p>' for label, text in warnings]
+    parts.append(how_to_read(terms, **(values or {})))
+    parts += list(body)
+    parts += [f"<p>Note: {esc(n)}</p>" for n in notes]
+    parts.append("<h2>Settings</h2>" + settings_table(settings or {}, meanings))
+    return page(title, "\n".join(parts))
+
+
+def _failing_table(failing) -> str:
+    """The intervals where a model fails beyond 3 sigma, as a table (or a sentence when there are none)."""
+    rows = [(f["channel"], f["text"]) for f in failing]
+    return table(["channel", "interval"], rows, left=2, wrap=(1,)) if rows else "<p>nowhere beyond 3 sigma</p>"
+
+
 _DIAGNOSIS_SETTINGS = {
     "calibrate": "base parameters refitted with every structure",
     "candidates": "catalogue effects tried",
@@ -726,24 +814,13 @@ def diagnosis_html(d, figs=None) -> str:
     """
     figs = figs or {"s": plot_diagnosis(d), "r": plot_ranking(d)}
     f_sig, f_rank = list(figs.values())
-    parts = [f'<p class="big">{esc(diagnosis_plain_headline(d))}</p>']
-    if d.unexplained_:
-        parts.append(f'<p class="warn"><b>Unexplained:</b> {esc(d.unexplained_["text"])}</p>')
-    for c in d.caveats_:
-        parts.append(f'<p class="warn"><b>Caution:</b> {esc(c)}</p>')
-    parts.append(how_to_read(("fit", "dbic", "heldout", "cautions", "uncertainty", "sigma"),
-                             min_delta_bic=d.min_delta_bic, min_holdout_gain=d.min_holdout_gain))
-    parts.append("<h2>Measured, calibrated base and final model</h2>")
+    parts = ["<h2>Measured, calibrated base and final model</h2>"]
     parts.append(figure_block(f_sig, "signals and residuals",
                               "Per channel: the signals, the residual, its autocorrelation and its spectrum, for "
                               "the calibrated base model (blue) and the final model (red). Red shading: where the "
                               "base model fails beyond 3 sigma. Dashed lines: phases of the start-up."))
-    rows = [(f["channel"], f["text"]) for f in d.comparison_base_.failing]
-    parts.append("<h3>Where the base model fails</h3>" + (table(["channel", "interval"], rows, left=2, wrap=(1,))
-                                                            if rows else "<p>nowhere beyond 3 sigma</p>"))
-    rows = [(f["channel"], f["text"]) for f in d.comparison_final_.failing]
-    parts.append("<h3>Where the final model fails</h3>" + (table(["channel", "interval"], rows, left=2, wrap=(1,))
-                                                             if rows else "<p>nowhere beyond 3 sigma</p>"))
+    parts.append("<h3>Where the base model fails</h3>" + _failing_table(d.comparison_base_.failing))
+    parts.append("<h3>Where the final model fails</h3>" + _failing_table(d.comparison_final_.failing))
     fc = d.final_calibration_
     parts.append("<h2>Final model: fitted parameters</h2>")
     parts.append(f"<p>{esc(', '.join(d.calibrate))} refitted with "
@@ -770,10 +847,13 @@ def diagnosis_html(d, figs=None) -> str:
         parts.append(table(["effect", "dBIC", "held-out gain [%]", "current fit [%]", "effect parameters",
                             "verdict"], rows, left=1, selected=sel, wrap=(4, 5)))
     parts.append("<h2>What the final model still misses</h2><p>" + esc(d.signature_["text"]) + "</p>")
-    for note in d.experiment_.notes:
-        parts.append(f"<p>Note: {esc(note)}</p>")
-    parts.append("<h2>Settings</h2>" + settings_table(diagnosis_dict(d)["settings"], _DIAGNOSIS_SETTINGS))
-    return page(f"Diagnosis of {record_name_of(d.measurement_.source)}", "\n".join(parts))
+    warnings = ([("Unexplained", d.unexplained_["text"])] if d.unexplained_ else []) + [
+        ("Caution", c) for c in d.caveats_]
+    return report_page(f"Diagnosis of {record_name_of(d.measurement_.source)}", diagnosis_plain_headline(d), parts,
+                       warnings=warnings, terms=("fit", "dbic", "heldout", "cautions", "uncertainty", "sigma"),
+                       values={"min_delta_bic": d.min_delta_bic, "min_holdout_gain": d.min_holdout_gain},
+                       notes=d.experiment_.notes, settings=diagnosis_dict(d)["settings"],
+                       meanings=_DIAGNOSIS_SETTINGS)
 
 
 def record_name_of(source) -> str:
@@ -811,13 +891,7 @@ def write_diagnosis_report(d, folder, protect=()) -> list:
         Files written (each whole or not at all).
     """
     figs = {"diagnose_signals.png": plot_diagnosis(d), "diagnose_ranking.png": plot_ranking(d)}
-    pngs = {}
-    for name, fig in figs.items():
-        buf = io.BytesIO()
-        fig.savefig(buf, format="png", dpi=100)
-        pngs[name] = buf.getvalue()
-    return write_report_files(folder, {"diagnose.html": diagnosis_html(d, figs), "diagnose.json": diagnosis_dict(d),
-                                       **pngs}, protect=protect)
+    return write_page_files(folder, "diagnose", diagnosis_html(d, figs), diagnosis_dict(d), figs, protect, dpi=100)
 
 
 # --- comparison ------------------------------------------------------------------------------------
@@ -852,25 +926,20 @@ def comparison_html(c, fig=None) -> str:
     offsets = [f"the {names.get(k, k)} by {abs(ch.bias):.3g} {ch.unit} on average (model too "
                f"{'low' if ch.bias > 0 else 'high'})" for k, ch in c.channels.items() if abs(ch.bias) > 0.5 * ch.rms]
     head = f"The {model} reproduces {fits}. " + (f"It misses {' and '.join(offsets)}. " if offsets else "") + where
-    parts = [f'<p class="big">{esc(head)}</p>', how_to_read(("fit", "sigma", "whiteness"))]
     rows = []
     for k, ch in c.channels.items():
         w = ch.whiteness
         bias = ch.bias if abs(ch.bias) >= 1e-3 * ch.rms else 0.0
         rows.append((names.get(k, k), f"{ch.fit:.1f}", f"{ch.rms:.3g}", f"{bias:+.3g}", ch.unit,
                      f"{w['n_outside']} of {len(w['lags']) - 1}", f"{ch.spectrum['dominant_hz']:.2f}"))
-    parts.append("<h2>Per channel</h2>" + table(["channel", "fit [%]", "residual rms", "bias", "unit",
+    parts = ["<h2>Per channel</h2>" + table(["channel", "fit [%]", "residual rms", "bias", "unit",
                                                  "autocorrelation lags outside 99 % band",
-                                                 "dominant residual frequency [Hz]"], rows))
-    parts.append("<h2>Measured and model</h2>" + figure_block(fig, "measured vs model"))
-    rows = [(f["channel"], f["text"]) for f in fails]
-    parts.append("<h2>Where it fails</h2>" + (table(["channel", "interval"], rows, left=2, wrap=(1,))
-                                              if rows else "<p>nowhere beyond 3 sigma</p>"))
-    for note in c.experiment.notes:
-        parts.append(f"<p>Note: {esc(note)}</p>")
-    parts.append("<h2>Settings</h2>" + settings_table({"model": c.model, "effects": list(c.effects),
-                                                       "record": record_name_of(c.source)}))
-    return page(f"{record_name_of(c.source)} against the {model}", "\n".join(parts))
+                                                 "dominant residual frequency [Hz]"], rows),
+             "<h2>Measured and model</h2>" + figure_block(fig, "measured vs model"),
+             "<h2>Where it fails</h2>" + _failing_table(fails)]
+    return report_page(f"{record_name_of(c.source)} against the {model}", head, parts,
+                       terms=("fit", "sigma", "whiteness"), notes=c.experiment.notes,
+                       settings={"model": c.model, "effects": list(c.effects), "record": record_name_of(c.source)})
 
 
 def write_comparison_report(c, folder, protect=()) -> list:
@@ -891,7 +960,4 @@ def write_comparison_report(c, folder, protect=()) -> list:
         Files written (each whole or not at all).
     """
     fig = c.plot()
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110)
-    return write_report_files(folder, {"compare.html": comparison_html(c, fig),
-                                       "compare.json": c.to_dict(), "compare.png": buf.getvalue()}, protect=protect)
+    return write_page_files(folder, "compare", comparison_html(c, fig), c.to_dict(), {"compare.png": fig}, protect)

@@ -233,7 +233,7 @@ class RawTable:
         return s + (f", column {column!r}" if column else "")
 
 
-def read_table(path) -> RawTable:
+def read_table(path, kind: str | None = None) -> RawTable:
     """Read a record file of any supported format into a :class:`RawTable`.
 
     Parameters
@@ -241,6 +241,8 @@ def read_table(path) -> RawTable:
     path : path-like
         ``.csv``/``.txt``/``.tsv`` (text), ``.xlsx``/``.xlsm`` (first sheet;
         openpyxl), ``.parquet`` (pyarrow) or ``.mat`` (MATLAB v4-v7; scipy).
+    kind : {"csv", "excel", "parquet", "matlab"}, optional
+        The format; by default from the suffix (text for an unknown one).
 
     Returns
     -------
@@ -257,7 +259,7 @@ def read_table(path) -> RawTable:
         raise DataError(f"{path}: is a folder, not a measurement file")
     if not path.exists():
         raise DataError(f"{path}: no such measurement file")
-    kind = FORMATS.get(path.suffix.lower(), "csv")
+    kind = kind or FORMATS.get(path.suffix.lower(), "csv")
     return {"csv": _read_text, "excel": _read_excel, "parquet": _read_parquet, "matlab": _read_mat}[kind](path)
 
 

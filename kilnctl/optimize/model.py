@@ -36,6 +36,40 @@ __all__ = ["SmoothStartup", "load_stress", "OUTPUTS", "smooth_components", "hybr
 #: tolerance factors tried in turn when CVODES fails (seen: a trial Newton iterate at the backlash impact
 #: made the right-hand side non-finite at rtol 1e-8, while 1e-7 and 1e-9 ran)
 RETRY_TIGHTEN = (1.0, 0.1)
+
+
+def integrate_retrying(integrator, theta, **inputs) -> dict:
+    """Run a CasADi integrator, again at tighter tolerances (:data:`RETRY_TIGHTEN`) when CVODES fails.
+
+    Parameters
+    ----------
+    integrator : callable
+        ``integrator(tighten)`` -> the CasADi integrator with its tolerances times ``tighten`` [-].
+    theta : sequence of float
+        Profile numbers [units of the profile], for the message.
+    **inputs
+        The integrator's inputs (``x0``, ``p``).
+
+    Returns
+    -------
+    dict
+        The integrator's outputs.
+
+    Raises
+    ------
+    OptimizationError
+        CVODES failed at every tolerance tried (the message names the profile numbers).
+    """
+    why = ""
+    for tighten in RETRY_TIGHTEN:
+        try:
+            return integrator(tighten)(**inputs)
+        except RuntimeError as exc:
+            why = str(exc).splitlines()[-1]
+    raise OptimizationError(f"the smooth model failed to integrate at profile numbers {list(theta)} "
+                            f"(also with tighter tolerances): {why}")
+
+
 #: output rows of the smooth model
 OUTPUTS = ("sigma", "sigma_dyn", "i_a", "e_a", "speed_rpm")
 
@@ -330,16 +364,7 @@ class SmoothStartup:
         grid = np.asarray(grid, dtype=float)
         P = self.param_vector(params)
         x0 = self.x0(params, np.asarray(theta, dtype=float), widths)
-        X = None
-        for tighten in RETRY_TIGHTEN:
-            try:
-                X = self.integrator(0.0, grid, tighten=tighten)(x0=x0, p=P)["xf"]
-                break
-            except RuntimeError as exc:
-                why = str(exc).splitlines()[-1]
-        if X is None:
-            raise OptimizationError(f"the smooth model failed to integrate at profile numbers {list(theta)} "
-                                    f"(also with tighter tolerances): {why}")
+        X = integrate_retrying(lambda tighten: self.integrator(0.0, grid, tighten=tighten), theta, x0=x0, p=P)["xf"]
         Y = np.asarray(self.output_map(len(grid))(X, grid, P))
         out = {"t": grid}
         out.update({n: Y[i] for i, n in enumerate(OUTPUTS)})

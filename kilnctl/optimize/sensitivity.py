@@ -21,8 +21,7 @@ import time
 import casadi as ca
 import numpy as np
 
-from ..errors import OptimizationError
-from .model import OUTPUTS, RETRY_TIGHTEN, SmoothStartup
+from .model import OUTPUTS, SmoothStartup, integrate_retrying
 
 __all__ = ["SensitivityRun", "CaseCallback", "smooth_max_np"]
 
@@ -147,16 +146,7 @@ class SensitivityRun:
         P = self.model.param_vector(params)
         x0 = np.asarray(self.model.x0(params, np.asarray(theta, float), widths), dtype=float).ravel()
         X0 = np.concatenate([x0, self.S0.ravel(order="F")])
-        r = None
-        for tighten in RETRY_TIGHTEN:
-            try:
-                r = self.integrator(tighten)(x0=X0, p=np.concatenate([P, np.asarray(pq, float)]))
-                break
-            except RuntimeError as exc:
-                why = str(exc).splitlines()[-1]
-        if r is None:
-            raise OptimizationError(f"the smooth model failed to integrate at profile numbers {list(theta)} "
-                                    f"(also with tighter tolerances): {why}")
+        r = integrate_retrying(self.integrator, theta, x0=X0, p=np.concatenate([P, np.asarray(pq, float)]))
         Xa = np.asarray(r["xf"])
         qf = np.asarray(r["qf"])
         y, dy = self.Y(Xa, self.grid, P)
