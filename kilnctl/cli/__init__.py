@@ -1,6 +1,7 @@
 """The ``kilnctl`` command.
 
-Each subcommand lives in its own module of this package and exposes
+Each subcommand lives in its own module of this package as a subclass of
+:class:`~kilnctl.cli.common.Command` (its options, its ``run``) and exposes
 ``register(subparsers)``, which adds its parser and sets ``func`` to a callable
 taking the parsed arguments and returning an exit code.
 """

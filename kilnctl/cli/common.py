@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import inspect
+import os
 import sys
+from pathlib import Path
 
 from ..params import Parameters, check_plausible
 
@@ -30,29 +33,62 @@ SHARED_OPTIONS = {
 }
 
 
-def add_command(sub, name: str, run, *, help: str, description: str):  # noqa: A002 - argparse's own keyword
-    """Add a subcommand whose parsed arguments go to ``run``; return its parser.
+class Command:
+    """A ``kilnctl`` subcommand; the docstring of a subclass is the description its ``--help`` shows.
 
-    Parameters
-    ----------
-    sub : argparse._SubParsersAction
-        The subparsers of the ``kilnctl`` parser.
-    name : str
-        Subcommand name.
-    run : callable
-        Takes the parsed arguments, returns the exit code.
-    help : str
-        One line for ``kilnctl --help``.
-    description : str
-        What the subcommand does, for ``kilnctl NAME --help``.
-
-    Returns
-    -------
-    argparse.ArgumentParser
+    A subclass sets :attr:`name` and :attr:`help`, adds its options in :meth:`add_arguments` and
+    does its work in :meth:`run`; its module exposes ``register = TheCommand.register``, which
+    :func:`kilnctl.cli.build_parser` calls.
     """
-    parser = sub.add_parser(name, help=help, description=description)
-    parser.set_defaults(func=run)
-    return parser
+
+    #: the subcommand's name
+    name = ""
+    #: one line for ``kilnctl --help`` (an option help: a literal percent sign is written %%)
+    help = ""  # noqa: A003 - argparse's own word
+
+    @classmethod
+    def register(cls, sub):
+        """Add the subcommand, its options and its action to the ``kilnctl`` parser.
+
+        Parameters
+        ----------
+        sub : argparse._SubParsersAction
+            The subparsers of the ``kilnctl`` parser.
+
+        Returns
+        -------
+        argparse.ArgumentParser
+            The subcommand's parser.
+        """
+        command = cls()
+        parser = sub.add_parser(cls.name, help=cls.help, description=inspect.cleandoc(cls.__doc__))
+        command.add_arguments(parser)
+        parser.set_defaults(func=command.run)
+        return parser
+
+    def add_arguments(self, parser) -> None:
+        """Add the subcommand's options (:func:`add_options` for those several subcommands share).
+
+        Parameters
+        ----------
+        parser : argparse.ArgumentParser
+            The subcommand's parser.
+        """
+
+    def run(self, args) -> int:
+        """Do the subcommand's work and print or write its result; return the exit code.
+
+        Parameters
+        ----------
+        args : argparse.Namespace
+            The parsed arguments.
+
+        Returns
+        -------
+        int
+            0 on success (a subcommand's module docstring names any other code).
+        """
+        raise NotImplementedError(f"kilnctl {self.name}: no run()")
 
 
 def add_options(parser, **options) -> None:
@@ -118,6 +154,67 @@ def load_params(args) -> Parameters:
     return params
 
 
+def same_file(a, b) -> bool:
+    """True if two paths name the same file (existing or not).
+
+    Parameters
+    ----------
+    a, b : path-like
+        The paths.
+
+    Returns
+    -------
+    bool
+    """
+    a, b = Path(a), Path(b)
+    try:
+        if a.exists() and b.exists():
+            return os.path.samefile(a, b)
+    except OSError:
+        pass
+    return a.resolve() == b.resolve()
+
+
+def check_output_files(outputs: dict, inputs: dict) -> None:
+    """Refuse output files that would overwrite an input, a folder or each other, and a figure of unknown format.
+
+    Called before any work, so that a bad name costs nothing.
+
+    Parameters
+    ----------
+    outputs : dict of str to path-like or None
+        Option -> file it names (None: not given); ``--plot`` names a figure, its format from the extension.
+    inputs : dict of str to path-like or None
+        What an input is called in the message (``"--config"``, ``"spec"``) -> the file.
+
+    Raises
+    ------
+    ConfigFileError
+        Naming the option, the file and the fix.
+    """
+    from ..errors import ConfigFileError
+
+    outs = [(flag, Path(v)) for flag, v in outputs.items() if v]
+    for flag, path in outs:
+        for what, given in inputs.items():
+            if given and same_file(path, given):
+                raise ConfigFileError(f"{flag} {path} is the {what} file: refusing to overwrite it")
+        if path.is_dir():
+            raise ConfigFileError(f"{flag} {path} is a folder: give a file name")
+    for i, (flag, path) in enumerate(outs):
+        for other, path2 in outs[i + 1:]:
+            if same_file(path, path2):
+                raise ConfigFileError(f"{flag} and {other} name the same file {path}: give two names")
+    if outputs.get("--plot"):
+        from matplotlib.figure import Figure
+
+        suffix = Path(outputs["--plot"]).suffix.lstrip(".").lower()
+        kinds = Figure().canvas.get_supported_filetypes()
+        if suffix not in kinds:
+            raise ConfigFileError(f"--plot {outputs['--plot']}: unknown figure format {suffix!r}; use one of "
+                                  + ", ".join(sorted(kinds)))
+
+
 def check_report_dir(args) -> None:
     """Refuse a ``--report`` path that is a file (or the data or config file), before any work.
 
@@ -140,7 +237,7 @@ def check_report_dir(args) -> None:
 
 
 def load_experiment_setup(args):
-    """Refuse a bad ``--report`` folder before any work, then load the ``--config`` setup, warning of implausible values.
+    """Refuse a bad ``--report`` folder before any work, then load the ``--config`` setup (implausible values: warned).
 
     Parameters
     ----------

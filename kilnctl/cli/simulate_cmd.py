@@ -7,47 +7,86 @@ whole or not at all, and never over the ``--config`` file.
 
 from __future__ import annotations
 
-import os
-from pathlib import Path
-
-from ..errors import ConfigFileError, SimulationError
+from ..errors import SimulationError
 from ..params import SPECS
 from . import print_json
 from ..figures import save_figure
-from .common import add_command, add_options, load_params
+from .common import Command, add_options, check_output_files, load_params
 
 #: default simulated time [s]: long enough for the paper's 15-17 s settling (Fig. 4, 5)
 DEFAULT_T_END = 40.0
 
 
-def register(sub) -> None:
-    """Add the ``simulate`` subcommand.
-
-    Parameters
-    ----------
-    sub : argparse._SubParsersAction
-        The subparsers of the ``kilnctl`` parser.
+class SimulateCommand(Command):
+    """Simulate a kiln start-up on the paper's macro or micro model with the designed (or configured) PID gains,
+    and summarise it.
     """
-    p = add_command(
-        sub, "simulate", run, help="simulate a start-up on the nonlinear plant (macro or micro model)",
-        description="Simulate a kiln start-up on the paper's macro or micro model with the "
-                    "designed (or configured) PID gains, and summarise it.")
-    add_options(p, model="macro: rigid reducer (eqs. 1-21); micro: coupling, pinion, mesh with backlash "
-                         "(eqs. 26-34). Default: macro", config=True, strict=True)
-    p.add_argument("--t-end", type=float, default=DEFAULT_T_END, metavar="S",
-                   help=f"simulated time [s] (default {DEFAULT_T_END:g})")
-    p.add_argument("--max-samples", type=int, default=None, metavar="N",
-                   help="largest number of output samples (t_end/dt) the run may keep in memory, checked before "
-                        "it starts (default 1000000, about 0.5 GB; or the environment variable "
-                        "KILNCTL_MAX_SAMPLES)")
-    p.add_argument("--law", choices=SPECS["friction_law"].choices, default=None,
-                   help="burden friction law: 'paper' (eq. 3 as printed) or 'torque' (torque-consistent); "
-                        "default: the config's friction_law")
-    add_options(p, effects={"default": "", "help": "comma-separated components to add, e.g. "
-                            "second_motor,speed_sensor_lag"})
-    p.add_argument("--csv", metavar="FILE", help="write the time series (outputs and modes) as CSV")
-    add_options(p, plot="write the standard figure set (format from the extension)",
-                json="print the summary as JSON")
+
+    name = "simulate"
+    help = "simulate a start-up on the nonlinear plant (macro or micro model)"
+
+    def add_arguments(self, parser) -> None:
+        add_options(parser,
+                    model="macro: rigid reducer (eqs. 1-21); micro: coupling, pinion, mesh with backlash "
+                          "(eqs. 26-34). Default: macro",
+                    config=True, strict=True)
+        parser.add_argument("--t-end", type=float, default=DEFAULT_T_END, metavar="S",
+                            help=f"simulated time [s] (default {DEFAULT_T_END:g})")
+        parser.add_argument("--max-samples", type=int, default=None, metavar="N",
+                            help="largest number of output samples (t_end/dt) the run may keep in memory, checked "
+                                 "before it starts (default 1000000, about 0.5 GB; or the environment variable "
+                                 "KILNCTL_MAX_SAMPLES)")
+        parser.add_argument("--law", choices=SPECS["friction_law"].choices, default=None,
+                            help="burden friction law: 'paper' (eq. 3 as printed) or 'torque' (torque-consistent); "
+                                 "default: the config's friction_law")
+        add_options(parser, effects={"default": "", "help": "comma-separated components to add, e.g. "
+                                                            "second_motor,speed_sensor_lag"})
+        parser.add_argument("--csv", metavar="FILE", help="write the time series (outputs and modes) as CSV")
+        add_options(parser, plot="write the standard figure set (format from the extension)",
+                    json="print the summary as JSON")
+
+    def run(self, args) -> int:
+        from ..model import component_names
+        from ..simulate import simulate
+
+        effects = _parse_effects(args.effects)
+        check_output_files({"--csv": args.csv, "--plot": args.plot}, {"--config": args.config})
+        params = load_params(args)
+        if args.law is not None:
+            params = params.replace(friction_law=args.law)
+        components = component_names(args.model, effects)  # checks the names before any work
+        resp = simulate(params, args.model, t_end=args.t_end, effects=effects, max_samples=args.max_samples)
+        if args.csv:
+            resp.to_csv(args.csv)
+        if args.plot:
+            from matplotlib.figure import Figure
+
+            save_figure(resp.plot(fig=Figure(figsize=(10, 9))), args.plot)
+        s = summary_dict(resp, params.friction_law, effects, components)
+        if args.json:
+            print_json(s)
+            return 0
+        print(f"kilnctl simulate: {args.model} model, {s['t_end_s']:g} s, friction law '{params.friction_law}'"
+              + (f", effects {', '.join(effects)}" if effects else ""))
+        print(f"  gains            k_p = {_gain(s['gains']['k_p'])} V/rpm, k_I = {_gain(s['gains']['k_I'])} V/(rpm*s), "
+              f"k_D = {_gain(s['gains']['k_D'])} V*s/rpm")
+        print(f"  peak current     {_fmt(s['peak_current_A'], ' A')}")
+        print(f"  final current    {_fmt(s['final_current_A'], ' A')} (mean of the last 5 s)")
+        settled = _fmt(s['settle_time_s'], ' s', fmt='.2f')
+        print(f"  speed settled    {settled} (within 2 % of {params.omega_ref:g} rpm)")
+        if "peak_stress_Pa" in s:
+            print(f"  peak stress      {_fmt(s['peak_stress_Pa'], ' MPa', 1e6, '.1f')}")
+            print(f"  final stress     {_fmt(s['final_stress_Pa'], ' MPa', 1e6, '.1f')} (mean of the last 5 s)")
+        print(f"  burden at end    {s['burden_mode_final']}")
+        kinds = ", ".join(f"{k} {v}" for k, v in s["events_by_kind"].items()) or "none"
+        print(f"  mode switches    {s['n_events']} ({kinds})")
+        for flag, path in (("csv", args.csv), ("plot", args.plot)):
+            if path:
+                print(f"  wrote {flag:<5}      {path}")
+        return 0
+
+
+register = SimulateCommand.register
 
 
 def _parse_effects(text: str) -> tuple[str, ...]:
@@ -58,37 +97,6 @@ def _parse_effects(text: str) -> tuple[str, ...]:
     if any(not s for s in items):
         raise SimulationError(f"--effects {text!r} has an empty name: give names separated by single commas")
     return tuple(items)
-
-
-def _same_file(a: Path, b: Path) -> bool:
-    """True if two paths name the same file (existing or not)."""
-    try:
-        if a.exists() and b.exists():
-            return os.path.samefile(a, b)
-    except OSError:
-        pass
-    return a.resolve() == b.resolve()
-
-
-def _check_outputs(args) -> None:
-    """Refuse output paths that would overwrite the config, each other, or a folder."""
-    outs = [(flag, Path(v)) for flag, v in (("--csv", args.csv), ("--plot", args.plot)) if v]
-    cfg = Path(args.config) if args.config else None
-    for flag, path in outs:
-        if cfg is not None and _same_file(path, cfg):
-            raise ConfigFileError(f"{flag} {path} is the --config file: refusing to overwrite it")
-        if path.is_dir():
-            raise ConfigFileError(f"{flag} {path} is a folder: give a file name")
-    if len(outs) == 2 and _same_file(outs[0][1], outs[1][1]):
-        raise ConfigFileError(f"--csv and --plot name the same file {outs[0][1]}: give two names")
-    if args.plot:
-        from matplotlib.figure import Figure
-
-        suffix = Path(args.plot).suffix.lstrip(".").lower()
-        kinds = Figure().canvas.get_supported_filetypes()
-        if suffix not in kinds:
-            raise ConfigFileError(f"--plot {args.plot}: unknown figure format {suffix!r}; use one of "
-                                  + ", ".join(sorted(kinds)))
 
 
 def summary_dict(resp, friction_law: str, effects, components) -> dict:
@@ -127,58 +135,6 @@ def summary_dict(resp, friction_law: str, effects, components) -> dict:
 
 def _fmt(v, unit="", scale=1.0, fmt=".0f") -> str:
     return "n/a (not settled)" if v is None else f"{v / scale:{fmt}}{unit}"
-
-
-def run(args) -> int:
-    """Run the simulation, write the requested files, print the summary; return the exit code.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        Parsed ``simulate`` arguments.
-
-    Returns
-    -------
-    int
-        0 on success.
-    """
-    from ..model import component_names
-    from ..simulate import simulate
-
-    effects = _parse_effects(args.effects)
-    _check_outputs(args)
-    params = load_params(args)
-    if args.law is not None:
-        params = params.replace(friction_law=args.law)
-    components = component_names(args.model, effects)  # checks the names before any work
-    resp = simulate(params, args.model, t_end=args.t_end, effects=effects, max_samples=args.max_samples)
-    if args.csv:
-        resp.to_csv(args.csv)
-    if args.plot:
-        from matplotlib.figure import Figure
-
-        save_figure(resp.plot(fig=Figure(figsize=(10, 9))), args.plot)
-    s = summary_dict(resp, params.friction_law, effects, components)
-    if args.json:
-        print_json(s)
-        return 0
-    print(f"kilnctl simulate: {args.model} model, {s['t_end_s']:g} s, friction law '{params.friction_law}'"
-          + (f", effects {', '.join(effects)}" if effects else ""))
-    print(f"  gains            k_p = {_gain(s['gains']['k_p'])} V/rpm, k_I = {_gain(s['gains']['k_I'])} V/(rpm*s), "
-          f"k_D = {_gain(s['gains']['k_D'])} V*s/rpm")
-    print(f"  peak current     {_fmt(s['peak_current_A'], ' A')}")
-    print(f"  final current    {_fmt(s['final_current_A'], ' A')} (mean of the last 5 s)")
-    print(f"  speed settled    {_fmt(s['settle_time_s'], ' s', fmt='.2f')} (within 2 % of {params.omega_ref:g} rpm)")
-    if "peak_stress_Pa" in s:
-        print(f"  peak stress      {_fmt(s['peak_stress_Pa'], ' MPa', 1e6, '.1f')}")
-        print(f"  final stress     {_fmt(s['final_stress_Pa'], ' MPa', 1e6, '.1f')} (mean of the last 5 s)")
-    print(f"  burden at end    {s['burden_mode_final']}")
-    kinds = ", ".join(f"{k} {v}" for k, v in s["events_by_kind"].items()) or "none"
-    print(f"  mode switches    {s['n_events']} ({kinds})")
-    for flag, path in (("csv", args.csv), ("plot", args.plot)):
-        if path:
-            print(f"  wrote {flag:<5}      {path}")
-    return 0
 
 
 def _gain(v: float) -> str:
