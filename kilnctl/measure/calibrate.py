@@ -44,6 +44,9 @@ MIN_LIMIT_S = 4.0
 MAX_EVENTS = 300
 #: residual value given to a failed trial run, in scaled units
 PENALTY = 30.0
+#: lags [s] at which the phase-free residual compares autocovariances (see _Problem.cycle_residual): above the
+#: correlation time of measurement noise, up to a few stick-slip periods
+CYCLE_LAGS_S = (1.0, 10.0)
 
 
 def holdout_masks(measurement: Measurement, kind: str = "blocks", fraction: float = 0.3, n_blocks: int = 15,
@@ -225,6 +228,9 @@ class _Problem:
         self.deadline = None  # time.perf_counter() value after which no further trial is run
         self._limit = None  # wall time [s] above which a trial run counts as failed
         self.step_window = None  # (t_min, t_max) [s]: an abrupt step of the current is part of the model
+        self.horizon_end = None  # record time [s] of the last fitted sample when the fit is on a shorter horizon
+        self.t_act = measurement.t[active]
+        self.cycles_from = None  # record time [s] from which the residual is phase-free (see cycle_residual)
 
     def set_smoothing(self, width_s: float) -> None:
         """Compare moving averages of ``width_s`` seconds of the residual (0: the residual itself)."""
@@ -250,7 +256,10 @@ class _Problem:
             limit = self._limit
         t_start = time.perf_counter()
         try:
-            run = run_model(p, self.m, self.exp, model=self.model, effects=self.effects, max_events=MAX_EVENTS)
+            # on a shorter horizon the model runs only as far as the (smoothed) residual looks: it is causal
+            t_stop = None if self.horizon_end is None else self.horizon_end + (self.smooth_n // 2 + 2) * self.dt
+            run = run_model(p, self.m, self.exp, model=self.model, effects=self.effects, max_events=MAX_EVENTS,
+                            t_stop=t_stop)
         except KilnctlError as exc:
             self.n_failed += 1
             self.last_error = str(exc)
@@ -283,6 +292,8 @@ class _Problem:
 
     def residual(self, run: ModelRun | None, mask=None) -> np.ndarray:
         mask = self.mask if mask is None else mask
+        if self.cycles_from is not None:
+            return self.cycle_residual(run, mask)
         parts = []
         for c in CHANNELS:
             if run is None:
@@ -292,6 +303,40 @@ class _Problem:
                 if self.smooth_n > 1:  # a short event (an impact) misplaced in time then costs in proportion
                     e = np.convolve(e, np.full(self.smooth_n, 1.0 / self.smooth_n), mode="same")
                 parts.append(e[mask])
+        return np.concatenate(parts)
+
+    def cycle_residual(self, run: ModelRun | None, mask) -> np.ndarray:
+        """A residual that does not depend on the phase of self-sustained cycles after ``cycles_from``.
+
+        Before ``cycles_from`` (the ramp and the first breakaway) the scaled residual itself; after it, per
+        channel, the difference of the mean levels and of the autocovariances at lags from
+        :data:`CYCLE_LAGS_S` (model minus measurement, over the fitted samples).  Stick-slip cycles whose period
+        is slightly wrong drift out of phase, so that the simulation-error cost of a long record has a valley
+        for every whole number of cycles; their mean level, period and amplitude -- which is what the
+        autocovariance holds -- change smoothly with the friction and the burden's inertia.  Lags below the
+        lower end skip the measurement noise's own correlation (tenths of a second).
+        """
+        head = mask & (self.t_act < self.cycles_from)
+        tail = mask & (self.t_act >= self.cycles_from)
+        n_tail = int(tail.sum())
+        k_lo, k_hi = (int(round(v / self.dt)) for v in CYCLE_LAGS_S)
+        k_hi = min(k_hi, n_tail // 2)
+        parts = []
+        for c in CHANNELS:
+            if run is None:
+                parts.append(np.full(int(head.sum()) + 1 + max(0, k_hi - k_lo + 1), PENALTY))
+                continue
+            parts.append(((self.meas[c] - run.outputs[c]) / self.scales[c])[head])
+            if n_tail < 2:
+                continue
+            ym, yo = self.meas[c][tail], run.outputs[c][tail]
+            parts.append(np.array([math.sqrt(n_tail) * (yo.mean() - ym.mean()) / self.scales[c]]))
+            if k_hi >= k_lo:
+                w = tail.astype(float)
+                cm = _autocov(np.where(tail, self.meas[c] - ym.mean(), 0.0), w, k_lo, k_hi)
+                co = _autocov(np.where(tail, run.outputs[c] - yo.mean(), 0.0), w, k_lo, k_hi)
+                # weighted like n_tail samples of the residual: sum over lags ~ n_tail (dC / s^2)^2
+                parts.append(math.sqrt(n_tail / (k_hi - k_lo + 1)) * (co - cm) / self.scales[c] ** 2)
         return np.concatenate(parts)
 
     def rss(self, run: ModelRun, mask=None) -> dict:
@@ -447,6 +492,7 @@ class _Search:
         self.nfev = 1
         self.horizon = 1.0
         self.log_coord = np.array([c[0].startswith("ln(") for c in space.coords], bool)
+        self.cycles_from = None  # record time [s]: each local fit starts with a phase-free stage (cycle_stage)
 
     def trial(self, u) -> _Trial:
         key = np.asarray(u, float).tobytes()
@@ -464,7 +510,9 @@ class _Search:
 
     def set_horizon(self, h):
         self.horizon = h
-        self.prob.mask = self.full_mask & (self.t_act <= self.t0 + h * self.span + 1e-9)
+        end = self.t0 + h * self.span
+        self.prob.mask = self.full_mask & (self.t_act <= end + 1e-9)
+        self.prob.horizon_end = end if h < 1.0 else None
         self.cache.clear()
 
     def set_smoothing(self, w):
@@ -483,15 +531,19 @@ class _Search:
             if out and prob.deadline is not None and time.perf_counter() > prob.deadline:
                 break  # out of time: no further local fit
             start, J, msg = u, np.zeros((0, 0)), "nothing to fit"
+            if self.cycles_from is not None and self.space.coords:
+                u = self.cycle_stage(u)
             for i, h in enumerate(hs):
-                self.set_horizon(h)
                 if not self.space.coords:
                     break
+                self.set_horizon(h)
                 if i > 0:
                     u = self.probe(u)
                 for w in smoothing.schedule(first=i == 0, last=i == len(hs) - 1):
                     self.set_smoothing(w)
                     u, J, msg = self.local(u)
+            if self.horizon < 1.0:  # nothing to fit: the end is still judged on the whole record
+                self.set_horizon(1.0)
             self.set_smoothing(0.0)
             deadline, prob.deadline = prob.deadline, None  # the end of a fit is always evaluated
             end = self.trial(u)
@@ -501,7 +553,21 @@ class _Search:
         prob.deadline = None
         return out
 
-    def local(self, u):
+    def cycle_stage(self, u):
+        """A local fit of the phase-free residual on the whole record (see _Problem.cycle_residual): it sets
+        the cycles' period, amplitude and mean level, from where the simulation-error fits track their phase."""
+        self.set_horizon(1.0)
+        self.set_smoothing(0.0)
+        self.prob.cycles_from = self.cycles_from
+        self.cache.clear()
+        try:
+            u, _, _ = self.local(u, tol=self.tol)
+        finally:
+            self.prob.cycles_from = None
+            self.cache.clear()
+        return u
+
+    def local(self, u, tol=None):
         """One trust-region fit from u; coordinates without influence at u stay where they are
         (a Gauss-Newton step along a zero Jacobian column is unbounded, and would throw the parameter
         across a regime boundary, e.g. mu_s while the burden is held)."""
@@ -534,7 +600,8 @@ class _Search:
             return _forward_jacobian(self.fun, w, self.diff_step, space.upper, live)[:, live]
 
         # on a smoothed residual or a shorter horizon the fit only has to find the basin of the next stage
-        tol = self.tol if self.prob.smooth_n <= 1 and self.horizon >= 1.0 else 10 * self.tol
+        if tol is None:
+            tol = self.tol if self.prob.smooth_n <= 1 and self.horizon >= 1.0 else 10 * self.tol
         res = least_squares(f_live, u[live], jac=jac_live, bounds=(space.lower[live], space.upper[live]),
                             x_scale=1.0, max_nfev=self.max_nfev, method="trf", ftol=tol, xtol=tol)
         self.nfev += int(res.nfev)
@@ -704,7 +771,7 @@ class Calibration:
     # --- estimator API --------------------------------------------------------------
     def fit(self, measurement: Measurement, mask=None, *, init: dict | None = None,
             starts=None, experiment: Experiment | None = None, horizons=(1.0,), n_local: int = 2,
-            separation: float = 1.0, smoothing=(0.0,)) -> "Calibration":
+            separation: float = 1.0, smoothing=(0.0,), cycles: bool = False) -> "Calibration":
         """Fit the parameters to a record.
 
         Parameters
@@ -754,6 +821,15 @@ class Calibration:
             cannot descend.  On a smoothed residual both costs fall smoothly
             as the event moves closer.  The last width is always 0 (the
             residual itself).
+        cycles : bool, default False
+            Begin every local fit with a phase-free stage on the whole
+            record: up to 1.5 s after the ramp the residual itself, after
+            that the mean level and the autocovariance of each channel (at
+            lags of 1-10 s).  For self-sustained cycles (torque-law
+            stick-slip): when their period is slightly off they drift out
+            of phase, and the simulation-error cost has a valley for every
+            whole number of cycles; their period, amplitude and level
+            change smoothly with the parameters.
 
         Returns
         -------
@@ -777,10 +853,18 @@ class Calibration:
         t_wall = time.perf_counter()
         prob.deadline = None if self.time_limit_s is None else t_wall + self.time_limit_s
         search = _Search(prob, space, measurement.t[active], exp.t0, self.diff_step, self.max_nfev, self.tol)
+        if cycles:
+            search.cycles_from = exp.t0 + (exp.omega_ref / exp.ramp_rate if exp.ramp_rate > 0 else 0.0) + 1.5
         u0s = [space.encode(v) for v in starts.points_from(space.reported, start_vals)]
         search.set_horizon(horizons.schedule()[0])
         search.set_smoothing(smoothing.schedule()[0])
+        if search.cycles_from is not None:  # starting points compared on the phase-free residual too
+            search.set_horizon(1.0)
+            search.set_smoothing(0.0)
+            prob.cycles_from = search.cycles_from
         firsts = starts.choose(u0s, [search.trial(u).cost for u in u0s] if len(u0s) > 1 else [0.0])
+        prob.cycles_from = None
+        search.cache.clear()
         results = search.fit_all(firsts, horizons, smoothing)
         # the given starting point stays a candidate: a refit is never worse than the values it started from
         # (a local fit on a rugged cost, or through a smoothed residual, can end above where it began)
@@ -1010,6 +1094,17 @@ def _forward_jacobian(fun, u, step, upper, cols=None) -> np.ndarray:
         up[j] += h
         J[:, j] = (fun(up) - r0) / h
     return J
+
+
+def _autocov(x, w, k_lo, k_hi) -> np.ndarray:
+    """Autocovariance of a gapped series at lags k_lo..k_hi [samples]: sum x_i x_(i+k) over the pairs whose
+    samples are both present (weights w of 1 or 0), divided by their number."""
+    n = x.size
+    size = 1 << int(math.ceil(math.log2(2 * n)))
+    fx, fw = np.fft.rfft(x * w, size), np.fft.rfft(w, size)
+    num = np.fft.irfft(fx * np.conj(fx), size)[k_lo:k_hi + 1]
+    den = np.fft.irfft(fw * np.conj(fw), size)[k_lo:k_hi + 1]
+    return num / np.maximum(np.round(den), 1.0)
 
 
 def _covariance(J, s2, G):

@@ -90,7 +90,8 @@ def kiln_angle(t, speed_rpm, n) -> np.ndarray:
 
 
 def run_model(params: Parameters, measurement: Measurement, experiment: Experiment, *, model: str = "macro",
-              effects=(), remove=(), dt: float | None = None, max_events: int = 3000) -> ModelRun:
+              effects=(), remove=(), dt: float | None = None, max_events: int = 3000,
+              t_stop: float | None = None) -> ModelRun:
     """Simulate the experiment of ``measurement`` and sample the model at its times.
 
     Parameters
@@ -111,6 +112,11 @@ def run_model(params: Parameters, measurement: Measurement, experiment: Experime
         Simulation output step [s]; the simulator's default for the model.
     max_events : int, default 3000
         Mode switches allowed before the run is refused (a runaway fit).
+    t_stop : float, optional
+        Record time [s] after which the model need not run (a fit on the
+        first part of the record: the model is causal, so its outputs up to
+        ``t_stop`` do not depend on what follows).  Later samples hold the
+        last simulated value; default: the whole record.
 
     Returns
     -------
@@ -124,6 +130,8 @@ def run_model(params: Parameters, measurement: Measurement, experiment: Experime
     t_end = float(t[-1] - experiment.t0)
     if t_end <= 0:
         raise KilnctlError(f"{measurement.source}: the start-up begins at {experiment.t0:g} s, after the last sample")
+    if t_stop is not None:
+        t_end = min(t_end, max(float(t_stop) - experiment.t0, 4 * (t[1] - t[0]) if t.size > 1 else t_end))
     dt = _DT.get(model, 1e-3) if dt is None else dt
     resp = simulate(p, model, t_end=t_end, effects=tuple(effects), remove=tuple(remove), dt=min(dt, t_end / 4),
                     max_events=max_events)

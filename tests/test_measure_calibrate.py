@@ -1,0 +1,95 @@
+"""The phase-free residual of self-sustained cycles and the horizon-truncated model runs of a calibration."""
+
+import math
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from kilnctl import Parameters
+from kilnctl.measure import Measurement
+from kilnctl.measure.calibrate import _autocov, _Problem
+from kilnctl.measure.runner import run_model
+from kilnctl.simulate import resolve_gains
+
+FS = 50.0
+
+
+def test_autocovariance_of_a_gapped_series_by_direct_sums():
+    # truth: the definition, summed pair by pair over the samples present in both places
+    rng = np.random.default_rng(3)
+    x = rng.standard_normal(300)
+    w = (rng.random(300) > 0.3).astype(float)
+    got = _autocov(x * w, w, 2, 40)
+    for k, g in zip(range(2, 41), got):
+        pairs = w[:-k] * w[k:]
+        assert g == pytest.approx(np.sum(x[:-k] * x[k:] * pairs) / pairs.sum(), rel=1e-9, abs=1e-12)
+
+
+def _problem(meas_current, cycles_from):
+    t = np.arange(meas_current.size) / FS
+    m = Measurement.from_arrays(t, meas_current + 500.0, np.full(t.size, 500.0), np.full(t.size, 500.0))
+    exp = SimpleNamespace(t0=0.0)
+    prob = _Problem(m, exp, Parameters(), "macro", (), {"current_A": 10.0, "speed_rpm": 1.0}, None)
+    prob.cycles_from = cycles_from
+    return prob, t
+
+
+def test_cycles_out_of_phase_cost_nothing_in_the_phase_free_residual():
+    # truth (analytic): the autocovariance of a sinusoid, A^2/2 cos(w k dt), does not depend on its phase, so a
+    # model whose cycles are half a period late fits the record's cycles exactly, while the residual itself
+    # is as large as it can be; a wrong period, or a wrong level, is not forgiven
+    t = np.arange(0, 40.0, 1 / FS)
+    w = 2 * math.pi / 3.0  # a 3 s stick-slip period
+    meas = 50.0 * np.sin(w * t)
+    prob, _ = _problem(meas, cycles_from=10.0)
+
+    def run(current):
+        return SimpleNamespace(outputs={"current_A": current + 500.0, "speed_rpm": np.full(t.size, 500.0)})
+
+    late = prob.residual(run(50.0 * np.sin(w * t + math.pi)))
+    head = int(np.sum(t < 10.0))
+    assert np.max(np.abs(late[head:])) < 0.02 * 50.0 ** 2 / 10.0 ** 2  # lags: within 2 % of the amplitude^2
+    assert np.sum(late[:head] ** 2) > 40.0 * head  # before cycles_from: the residual itself (mean of (10 sin)^2: 50)
+    other_period = prob.residual(run(50.0 * np.sin(1.1 * w * t)))
+    higher = prob.residual(run(50.0 * np.sin(w * t) + 20.0))
+    assert np.sum(other_period[head:] ** 2) > 100.0 * np.sum(late[head:] ** 2)
+    assert np.sum(higher[head:] ** 2) > 100.0 * np.sum(late[head:] ** 2)
+    prob.cycles_from = None  # the ordinary residual: the late cycles cost twice the record's energy
+    plain = prob.residual(run(50.0 * np.sin(w * t + math.pi)))
+    assert np.sum(plain[: t.size] ** 2) == pytest.approx(np.sum((2 * meas / 10.0) ** 2), rel=1e-9)
+
+
+def test_a_run_stopped_at_the_horizon_equals_the_whole_run_up_to_it():
+    # truth: the same simulation run to the end of the record (the model is causal)
+    params = resolve_gains(Parameters(gains="given", k_p=2.0, k_I=5.0, k_D=0.01, friction_law="torque"))
+    t = np.arange(0, 20.0, 1 / FS)
+    m = Measurement.from_arrays(t, np.zeros(t.size), np.zeros(t.size))
+    exp = SimpleNamespace(t0=0.0, ramp_rate=params.ramp_rate, omega_ref=params.omega_ref)
+    whole = run_model(params, m, exp)
+    part = run_model(params, m, exp, t_stop=9.0)
+    upto = t <= 9.0
+    for c in ("current_A", "speed_rpm"):
+        np.testing.assert_allclose(part.outputs[c][upto], whole.outputs[c][upto], rtol=1e-9, atol=1e-9)
+    assert part.response.t[-1] < 9.1
+
+
+def test_whitening_filter_turns_coloured_noise_white():
+    # truth: white noise plus first-order autoregressive noise (phi = 0.95, the benchmark's 0.4 s at 50 Hz) has
+    # lag-1 autocorrelation 0.5 * 0.95; after the fitted filter the autocorrelation of lags 1-50 lies within
+    # the 99 % band of white noise (2.576 / sqrt(N)) but for about 1 % of them
+    from kilnctl.measure.diagnose import noise_filter, whiten
+    from kilnctl.measure.stats import autocorr
+
+    rng = np.random.default_rng(5)
+    n = 4000
+    ar = np.zeros(n)
+    for k in range(1, n):
+        ar[k] = 0.95 * ar[k - 1] + math.sqrt(1 - 0.95 ** 2) * 4.0 * rng.standard_normal()
+    e = 4.0 * rng.standard_normal(n) + ar
+    assert autocorr(e, 50)["r"][1] == pytest.approx(0.475, abs=0.05)
+    a = noise_filter(e)
+    assert 0 < a.size <= 25
+    ac = autocorr(whiten(e, a)[a.size:], 50)
+    assert ac["n_outside"] <= 3
+    assert noise_filter(rng.standard_normal(n)).size == 0  # white noise needs no filter
