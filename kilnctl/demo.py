@@ -115,7 +115,7 @@ def main(argv=None) -> int:
 
     # --- start-up ramp optimization --------------------------------------------------
     t0 = _step("4. Start-up ramp that spares the girth gear (CasADi/IPOPT, verified on the hybrid plant)")
-    from .optimize.demo import demo_ramp
+    from .demo_ramp import demo_ramp
 
     demo_ramp(out, params)
     print(f"  ({time.perf_counter() - t0:.1f} s)")

@@ -1,5 +1,14 @@
 """PID gains of the speed controller (eq. 21): used by the design, the linear models and the simulator alike,
-so it lives below all three (no upward import)."""
+so it lives below all three (no upward import).
+
+A parameter set may ask for designed gains (``gains = "design"``).  The
+design lives above the simulator, so the simulator cannot import it; instead
+the design is plugged in here from above: the package root
+(``kilnctl/__init__.py``, which Python runs before any kilnctl module) passes
+:func:`kilnctl.design.gains_for` to :func:`use_designer`, importing the design
+only when a run first needs it.  :func:`resolve_gains` then turns such a set
+into one with ``gains = "given"`` before anything is simulated.
+"""
 
 from __future__ import annotations
 
@@ -9,8 +18,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import DesignError
+from .params import Parameters
 
-__all__ = ["PIDGains", "GAIN_UNITS"]
+__all__ = ["PIDGains", "GAIN_UNITS", "resolve_gains", "use_designer"]
 
 #: units of the three gains, keyed as in :meth:`PIDGains.as_dict`
 GAIN_UNITS = {"kp": "V/rpm", "ki": "V/(rpm*s)", "kd": "V*s/rpm"}
@@ -86,3 +96,61 @@ class PIDGains:
 
     def __str__(self) -> str:
         return f"k_p = {self.k_p:.4g} V/rpm, k_I = {self.k_I:.4g} V/(rpm*s), k_D = {self.k_D:.4g} V*s/rpm"
+
+
+#: the function that designs gains for ``gains = "design"`` (set by :func:`use_designer`)
+_designer = None
+
+
+def use_designer(designer) -> None:
+    """Set the function that designs the gains of a parameter set with ``gains = "design"``.
+
+    The package root sets :func:`kilnctl.design.gains_for`; call this only to
+    design gains another way everywhere (simulation, verification, sweeps).
+
+    Parameters
+    ----------
+    designer : callable
+        ``designer(params) -> PIDGains`` [V/rpm, V/(rpm*s), V*s/rpm].
+
+    Raises
+    ------
+    DesignError
+        When ``designer`` is not callable.
+    """
+    global _designer
+    if not callable(designer):
+        raise DesignError(f"designer = {designer!r} must be a function params -> PIDGains")
+    _designer = designer
+
+
+def resolve_gains(params: Parameters) -> Parameters:
+    """Return ``params`` with k_p, k_I, k_D filled in from the design if ``gains == 'design'``.
+
+    Parameters
+    ----------
+    params : Parameters
+        With ``gains = "given"`` it is returned unchanged; with ``gains =
+        "design"`` the designer set by :func:`use_designer` (the root-locus
+        design with default requirements) gives k_p [V/rpm], k_I
+        [V/(rpm*s)] and k_D [V*s/rpm].
+
+    Returns
+    -------
+    Parameters
+        With ``gains = 'given'`` and the designed (or given) gains.
+
+    Raises
+    ------
+    DesignError
+        When the gains are to be designed and no designer is set.
+    """
+    if params.gains == "given":
+        return params
+    if _designer is None:
+        raise DesignError("params.gains = 'design' but no gain designer is set: import kilnctl (whose root sets "
+                          "kilnctl.design.gains_for) or set gains = 'given' with k_p, k_I, k_D")
+    g = _designer(params)
+    if not isinstance(g, PIDGains):
+        raise DesignError(f"the gain designer returned {type(g).__name__}, not PIDGains")
+    return params.replace(gains="given", k_p=g.k_p, k_I=g.k_I, k_D=g.k_D)

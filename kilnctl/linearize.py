@@ -30,6 +30,7 @@ import control as ct
 import numpy as np
 
 from .errors import ModelError, SimulationError, close_matches_hint
+from .gains import resolve_gains
 from .model import component_names, get_plant
 from .model.base import NUMERIC_NAMES
 from .params import Parameters
@@ -176,7 +177,7 @@ def linearize(params: Parameters | None = None, model: str = "macro", *, effects
     SimulationError
         The start-up to the operating point fails.
     """
-    from .simulate import resolve_gains, simulate
+    from .simulate import simulate
 
     params = resolve_gains(Parameters() if params is None else params)
     if burden is not None and burden not in OPERATING_MODES:

@@ -28,11 +28,13 @@ from collections import Counter
 import numpy as np
 
 from .errors import EventStormError, ParameterError, SimulationError, close_matches_hint
+from .gains import resolve_gains
 from .model import Guard, component_names, get_plant
 from .model.stepper import GUARD_EPS, STATUS
 from .params import Parameters
 from .response import Event, Response
 
+# resolve_gains lives in kilnctl.gains; it stays importable from here for existing callers
 __all__ = ["simulate", "resolve_gains", "DEFAULT_DT"]
 
 #: a guard on its boundary counts as crossed at once when its rate takes it past -GUARD_EPS within
@@ -45,26 +47,6 @@ RUNAWAY = 1e6
 OUTPUT_BUFFER = 16384
 #: default output and guard-sampling step per model [s]
 DEFAULT_DT = {"macro": 5e-3, "micro": 1e-3}
-
-
-def resolve_gains(params: Parameters) -> Parameters:
-    """Return ``params`` with k_p, k_I, k_D filled in from the design if ``gains == 'design'``.
-
-    Parameters
-    ----------
-    params : Parameters
-
-    Returns
-    -------
-    Parameters
-        With ``gains = 'given'`` and the designed (or given) gains.
-    """
-    if params.gains == "given":
-        return params
-    from .design import gains_for
-
-    g = gains_for(params)
-    return params.replace(gains="given", k_p=g.k_p, k_I=g.k_I, k_D=g.k_D)
 
 
 def _check_size(names, params, t_end, dt, max_events, max_samples, n_grid, rtol, atol, **names_for_message):

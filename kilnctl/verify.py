@@ -19,7 +19,8 @@ from .errors import SimulationError
 from .params import Parameters
 from .response import Response
 from .units import RPM_PER_RAD_S
-from .simulate import resolve_gains, simulate
+from .gains import resolve_gains
+from .simulate import simulate
 
 __all__ = ["Verification", "verify", "ramp_figures"]
 

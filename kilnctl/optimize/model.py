@@ -18,6 +18,8 @@ Outputs (rows of :meth:`SmoothStartup.outputs`): ``sigma`` [Pa], ``sigma_dyn``
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import casadi as ca
 import numpy as np
 
@@ -29,7 +31,9 @@ from ..model.drivetrain import lewis_stress
 from ..model.kiln import bearing_torque
 from ..model.smooth import SMOOTH_DS, SMOOTH_V, smooth_names
 from ..params import Parameters
-from .problem import Profile
+
+if TYPE_CHECKING:  # annotations only: the problem imports this module (no import cycle at run time)
+    from .problem import Profile
 
 __all__ = ["SmoothStartup", "load_stress", "OUTPUTS", "smooth_components", "hybrid_components", "check_effects"]
 

@@ -19,9 +19,20 @@ import numpy as np
 from ..errors import KilnctlError, ParameterError, close_matches_hint
 from ..params import SPECS
 from ..files import write_atomic
-from .study import OUTPUTS
 
 __all__ = ["SweepResult", "wilson_interval"]
+
+#: outputs a study may ask for: keys of :meth:`kilnctl.response.Response.summary`, with unit and meaning
+OUTPUTS: dict[str, tuple[str, str]] = {
+    "peak_current_A": ("A", "largest absolute armature current of the run"),
+    "final_current_A": ("A", "time-weighted mean armature current over the last 5 s"),
+    "settle_time_s": ("s", "time after which the motor speed stays within 2 % of the set point (NaN: never)"),
+    "peak_stress_Pa": ("Pa", "largest absolute bending stress of a girth-gear tooth (Lewis)"),
+    "final_stress_Pa": ("Pa", "time-weighted mean tooth bending stress over the last 5 s"),
+    "n_events": ("-", "number of mode switches (breakaway, contact, limits ...)"),
+    "burden_mode_final": ("-", "burden mode at the end: stick, slip_pos, slip_neg or held"),
+    "wall_time_s": ("s", "simulation wall time of the point (not reproducible; for benchmarks)"),
+}
 
 #: file formats of :meth:`SweepResult.save`
 TABLE_FORMATS = (".csv", ".json")

@@ -25,21 +25,10 @@ import numpy as np
 
 from ..errors import ParameterError, close_matches_hint
 from ..params import SPECS, Parameters
+from .result import OUTPUTS
 from .space import Space
 
 __all__ = ["Study", "OUTPUTS", "SIM_OPTIONS"]
-
-#: outputs a study may ask for: keys of :meth:`kilnctl.response.Response.summary`, with unit and meaning
-OUTPUTS: dict[str, tuple[str, str]] = {
-    "peak_current_A": ("A", "largest absolute armature current of the run"),
-    "final_current_A": ("A", "time-weighted mean armature current over the last 5 s"),
-    "settle_time_s": ("s", "time after which the motor speed stays within 2 % of the set point (NaN: never)"),
-    "peak_stress_Pa": ("Pa", "largest absolute bending stress of a girth-gear tooth (Lewis)"),
-    "final_stress_Pa": ("Pa", "time-weighted mean tooth bending stress over the last 5 s"),
-    "n_events": ("-", "number of mode switches (breakaway, contact, limits ...)"),
-    "burden_mode_final": ("-", "burden mode at the end: stick, slip_pos, slip_neg or held"),
-    "wall_time_s": ("s", "simulation wall time of the point (not reproducible; for benchmarks)"),
-}
 
 #: keyword options of :func:`kilnctl.simulate.simulate` a study may set for every point
 SIM_OPTIONS = ("dt", "rtol", "atol", "event_tol", "max_events", "n_grid", "method", "max_step", "max_samples")
@@ -249,7 +238,7 @@ class Study:
             if self.redesign or self.base.gains == "given":
                 self._controlled = self.base
             else:
-                from ..simulate import resolve_gains
+                from ..gains import resolve_gains
 
                 self._controlled = resolve_gains(self.base)
         return self._controlled
@@ -366,7 +355,7 @@ class Study:
         -------
         SweepResult
         """
-        from .engine import run_sweep
+        from .engine import run_sweep  # inside: the engine runs studies, a study only hands itself over
 
         return run_sweep(self, executor, workers=workers, cache=cache, progress=progress)
 

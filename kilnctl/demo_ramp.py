@@ -1,13 +1,16 @@
-"""The ramp-optimization step of ``make demo`` (called from :mod:`kilnctl.demo`)."""
+"""The ramp-optimization step of ``make demo`` (called from :mod:`kilnctl.demo`).
+
+A demo step, so it sits with the demo above the optimizer and the pages it writes (it lived in
+``optimize/`` and made the optimizer import the pages above it)."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
-from ..params import Parameters
-from .problem import RampProblem
-from .result import RampResult
-from .solve import optimize_ramp
+from .optimize.problem import RampProblem
+from .optimize.result import RampResult
+from .optimize.solve import optimize_ramp
+from .params import Parameters
 
 __all__ = ["demo_ramp"]
 
@@ -41,7 +44,7 @@ def demo_ramp(out, params: Parameters | None = None, profile: str = "scurve", t_
     """
     from matplotlib.figure import Figure
 
-    from ..figures import save_figure
+    from .figures import save_figure
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -50,7 +53,7 @@ def demo_ramp(out, params: Parameters | None = None, profile: str = "scurve", t_
     save_figure(result.plot(fig=Figure(figsize=(10, 8.5))), out / "ramp_optimization.png")
     text = result.table()
     (out / "ramp_optimization.txt").write_text(result.headline() + "\n\n" + text + "\n")
-    from ..pages import write_ramp_report
+    from .pages import write_ramp_report
 
     write_ramp_report(result, out / "ramp")
     print("  " + result.headline() + ".")
