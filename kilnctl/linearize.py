@@ -31,7 +31,7 @@ import numpy as np
 
 from .errors import ModelError, SimulationError, close_matches_hint
 from .gains import resolve_gains
-from .model import component_names, get_plant
+from .model import get_plant
 from .model.base import NUMERIC_NAMES
 from .params import Parameters
 
@@ -151,8 +151,8 @@ def linearize(params: Parameters | None = None, model: str = "macro", *, effects
         Base model.
     effects, remove : sequence of str
         Components added to or taken out of the base model.
-    components : sequence of str, optional
-        The full component list instead.
+    components : sequence of str or Structure, optional
+        The full component list, or a :class:`kilnctl.structure.Structure`, instead.
     burden : {None, 'stick', 'slip'}, default None
         None: every moded component in the mode the start-up ends in (the
         drive at speed as it really runs).  'stick' or 'slip': the burden
@@ -177,12 +177,12 @@ def linearize(params: Parameters | None = None, model: str = "macro", *, effects
     SimulationError
         The start-up to the operating point fails.
     """
-    from .simulate import simulate
+    from .simulate import plant_structure, simulate
 
     params = resolve_gains(Parameters() if params is None else params)
     if burden is not None and burden not in OPERATING_MODES:
         raise ModelError(f"burden = {burden!r}: choose 'stick', 'slip' or None (the mode the start-up ends in)")
-    names = tuple(components) if components is not None else component_names(model, effects, remove)
+    names, params, _ = plant_structure(params, model, effects, remove, components)
     plant = get_plant(names, params)
     r = simulate(params, components=names, t_end=t_op)
     if params.ramp_rate * t_op < params.omega_ref:

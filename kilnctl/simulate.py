@@ -27,7 +27,7 @@ from collections import Counter
 
 import numpy as np
 
-from .errors import EventStormError, ParameterError, SimulationError, close_matches_hint
+from .errors import EventStormError, ModelError, ParameterError, SimulationError, close_matches_hint
 from .gains import resolve_gains
 from .model import Guard, component_names, get_plant
 from .model.stepper import GUARD_EPS, STATUS
@@ -35,7 +35,7 @@ from .params import Parameters
 from .response import Event, Response
 
 # resolve_gains lives in kilnctl.gains; it stays importable from here for existing callers
-__all__ = ["simulate", "resolve_gains", "DEFAULT_DT"]
+__all__ = ["simulate", "resolve_gains", "plant_structure", "DEFAULT_DT"]
 
 #: a guard on its boundary counts as crossed at once when its rate takes it past -GUARD_EPS within
 #: this time [s]; slower (grazing) guards are left to the integrator's crossing detection
@@ -47,6 +47,47 @@ RUNAWAY = 1e6
 OUTPUT_BUFFER = 16384
 #: default output and guard-sampling step per model [s]
 DEFAULT_DT = {"macro": 5e-3, "micro": 1e-3}
+
+
+def plant_structure(params: Parameters, model: str = "macro", effects=(), remove=(), components=None):
+    """Split the structure arguments of :func:`simulate` into component names, parameters and a model label.
+
+    Parameters
+    ----------
+    params : Parameters
+        Values of the plant [units of :data:`kilnctl.params.SPECS`].
+    model : str
+        Model preset, used when ``components`` is None.
+    effects, remove : sequence of str
+        Components added to or taken out of ``model``.
+    components : sequence of str or Structure, optional
+        The full component list, or a :class:`kilnctl.structure.Structure`
+        (used through its methods: this module sits below it).
+
+    Returns
+    -------
+    names : tuple of str
+        Components of the plant.
+    params : Parameters
+        With a Structure's effect options set (``friction_law`` ...).
+    model : str
+        The preset's name, or ``'custom'`` for a bare component list.
+
+    Raises
+    ------
+    ModelError
+        Unknown model or component, or a Structure given with ``effects`` or ``remove``.
+    """
+    if components is None:
+        return component_names(model, effects, remove), params, model
+    if hasattr(components, "components") and hasattr(components, "apply"):  # a kilnctl.structure.Structure
+        if effects or remove:
+            raise ModelError("give the effects inside the Structure (Structure.with_effects), not as effects= "
+                             "or remove= beside it")
+        return components.components(), components.apply(params), components.model
+    if isinstance(components, str):
+        raise ModelError(f"components = {components!r} must be a sequence of component names or a Structure")
+    return tuple(components), params, "custom"
 
 
 def _check_size(names, params, t_end, dt, max_events, max_samples, n_grid, rtol, atol, **names_for_message):
@@ -394,8 +435,10 @@ def simulate(params: Parameters | None = None, model: str = "macro", t_end: floa
         ``drivetrain_compliance`` ...).
     remove : sequence of str
         Components to take out (``current_limit`` ...).
-    components : sequence of str, optional
-        The full component list, instead of ``model``/``effects``/``remove``.
+    components : sequence of str or Structure, optional
+        The full component list, or a :class:`kilnctl.structure.Structure`
+        (its components, its effects' options, its model), instead of
+        ``model``/``effects``/``remove``.
     dt : float, optional
         Output and guard-sampling step [s] (default 5 ms macro, 1 ms micro).
     rtol, atol : float, default 1e-7, 1e-8
@@ -452,13 +495,13 @@ def simulate(params: Parameters | None = None, model: str = "macro", t_end: floa
     params = Parameters() if params is None else params
     if not isinstance(params, Parameters):
         raise ParameterError(f"params must be a kilnctl.Parameters, not {type(params).__name__}")
-    dt = DEFAULT_DT.get(model, 1e-3) if dt is None else dt
+    names, params, label = plant_structure(params, model, effects, remove, components)
+    dt = DEFAULT_DT.get(label if label != "custom" else model, 1e-3) if dt is None else dt
     _check_horizon(t_end, dt)
     if method not in ("auto", "cvodes", "ros3p"):
         raise SimulationError(f"method = {method!r}: choose 'auto', 'ros3p' (compiled stepper) or 'cvodes'")
     if isinstance(max_events, bool) or not isinstance(max_events, int) or max_events < 1:
         raise SimulationError(f"max_events = {max_events!r} must be a positive integer")
-    names = tuple(components) if components is not None else component_names(model, effects, remove)
     _check_size(names, params, t_end, dt, max_events, max_samples, n_grid, rtol, atol)
     if "pid" in names:
         params = resolve_gains(params)
@@ -507,7 +550,7 @@ def simulate(params: Parameters | None = None, model: str = "macro", t_end: floa
         modes=mode_arrays,
         events=eng.events,
         params=params,
-        model=model if components is None else "custom",
+        model=label,
         components=names,
         info={"wall_s": wall - build, "build_s": build, "n_events": len(eng.events), "dt": dt,
               "rtol": rtol, "event_tol": event_tol, "compiled": plant.compiled, "method": method,

@@ -200,8 +200,10 @@ def verify(params: Parameters | None = None, model: str = "macro", t_end: float 
         Components added to the nonlinear model (a structure a diagnosis
         learned: ``second_motor``, ``speed_sensor_lag`` ...); the linear
         prediction stays the design's rigid model.
-    components : sequence of str, optional
-        The full nonlinear component list instead of ``model``/``effects``.
+    components : sequence of str or Structure, optional
+        The full nonlinear component list, or a
+        :class:`kilnctl.structure.Structure` (its effects' options set on the
+        nonlinear run), instead of ``model``/``effects``.
 
     Returns
     -------

@@ -31,12 +31,14 @@ ROOT = Path(__file__).resolve().parents[1] / "kilnctl"
 #: layers, lowest first: a module may import its own layer or a lower one.  ``figures`` is the shared figure
 #: style (colours, fonts, writing a figure whole; it imports only errors and files), used by the ``.plot()``
 #: methods of the analysis objects of every layer, so it sits at the bottom; ``assumptions`` renders docs.
+#: ``structure`` resolves catalogue effects (measure/effects.py), so it sits with the measurement tools; the
+#: simulator and the linearization below it take a Structure through its methods only.
 LAYERS = (
     ("errors", "units", "params", "gains", "files", "budget", "figures"),
     ("model",),
     ("response", "simulate"),
     ("linear", "linearize"),
-    ("design", "verify", "optimize", "measure", "sweep"),
+    ("design", "verify", "optimize", "measure", "sweep", "structure"),
     ("report", "pages", "assumptions"),
     ("cli", "demo", "demo_ramp"),
 )

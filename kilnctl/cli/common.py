@@ -272,8 +272,8 @@ def learned_structure_args(args, params: Parameters, model: str | None):
 
     Returns
     -------
-    components : tuple of str or None
-        None when neither option is given.
+    structure : Structure or None
+        The learned structure (:class:`kilnctl.structure.Structure`); None when neither option is given.
     params : Parameters
         With the diagnosis' calibrated values and the effects' options, gains resolved.
     added : list of str
@@ -283,32 +283,23 @@ def learned_structure_args(args, params: Parameters, model: str | None):
     """
     if not (getattr(args, "effects", None) or getattr(args, "model_from", None)):
         return None, params, [], []
-    from ..measure.effects import effect_components
+    from ..gains import resolve_gains
     from ..model import component_names
-    from ..simulate import resolve_gains
+    from ..structure import Structure
 
     params = resolve_gains(params)
     gains = {k: params[k] for k in ("k_p", "k_I", "k_D")}
     selected: list[str] = []
-    comps = None
+    structure = Structure(model or "macro")
     if args.model_from:
         from ..design.learned import learned_structure
 
-        comps, params, selected = learned_structure(args.model_from, model=model, base=params)
+        structure, params, selected = learned_structure(args.model_from, model=model, base=params)
         params = params.replace(gains="given", **gains)
-    model = model or _model_of(comps) or "macro"
-    base = component_names(model)
-    added = [c for c in (comps or ()) if c not in base]
     if args.effects:
         names = [e.strip() for e in args.effects.split(",") if e.strip()]
-        extra, params = effect_components(names, params, model)
-        added += [c for c in extra if c not in added]
+        structure = structure.with_effects(*names)
+        params = structure.apply(params)
         selected += names
-    return component_names(model, added), params, added, selected
-
-
-def _model_of(components) -> str | None:
-    """The base model a component list was built on (micro when it has a mesh)."""
-    if components is None:
-        return None
-    return "micro" if "mesh" in components else "macro"
+    added = [c for c in structure.components() if c not in component_names(structure.model)]
+    return structure, params, added, selected

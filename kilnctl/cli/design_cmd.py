@@ -60,15 +60,13 @@ class DesignCommand(Command):
         if args.json:
             out = result.to_dict()
             if learned is not None:
-                out["learned"] = {"components": list(learned[0]), "selected": learned[1],
+                out["learned"] = {"components": list(learned[0].components()), "selected": learned[1],
                                   **learned[2].to_dict()}
             print_json(out)
         else:
             print(result.summary())
             if learned is not None:
-                from .common import _model_of
-
-                print(f"\nLearned structure: the {_model_of(learned[0])} model with "
+                print(f"\nLearned structure: the {learned[0].model} model with "
                       f"{', '.join(learned[1]) or 'no effect added'}"
                       + (f" (from {args.model_from})" if args.model_from else ""))
                 print(learned[2].summary())
@@ -86,9 +84,9 @@ def _learned(args, params, result, req):
     from ..gains import PIDGains
     from .common import learned_structure_args
 
-    comps, lp, _, selected = learned_structure_args(args, params, None)
-    if comps is None:
+    structure, lp, _, selected = learned_structure_args(args, params, None)
+    if structure is None:
         return None
     g = result.gains
     lp = lp.replace(gains="given", k_p=g.k_p, k_I=g.k_I, k_D=g.k_D)
-    return comps, selected, retune(lp, comps, PIDGains(g.k_p, g.k_I, g.k_D), req)
+    return structure, selected, retune(lp, structure, PIDGains(g.k_p, g.k_I, g.k_D), req)

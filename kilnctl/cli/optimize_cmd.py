@@ -71,10 +71,10 @@ class OptimizeRampCommand(Command):
 
         check_output_files({"--plot": args.plot}, {"--config": args.config})
         params = load_params(args)
-        _, params, effects, _ = learned_structure_args(args, params, "micro")
+        structure, params, _, _ = learned_structure_args(args, params, "micro")
         problem = RampProblem(params, profile=args.profile, t_max=args.t_max, horizon=args.horizon,
                               objective=args.objective, scenarios=default_scenarios() if args.robust else (),
-                              max_rate=args.max_rate, effects=tuple(effects))
+                              max_rate=args.max_rate, effects=structure or ())
         progress = None
         if not (args.quiet or args.json):
             print(f"kilnctl optimize-ramp: {problem.profile.label} ramp, {len(problem.profile.names)} number(s) to "

@@ -39,23 +39,28 @@ class SimulateCommand(Command):
         parser.add_argument("--law", choices=SPECS["friction_law"].choices, default=None,
                             help="burden friction law: 'paper' (eq. 3 as printed) or 'torque' (torque-consistent); "
                                  "default: the config's friction_law")
-        add_options(parser, effects={"default": "", "help": "comma-separated components to add, e.g. "
-                                                            "second_motor,speed_sensor_lag"})
+        add_options(parser, effects={"default": "", "help": "comma-separated effects (catalogue or component "
+                                                            "names) to add, e.g. second_motor,speed_sensor_lag"})
+        parser.add_argument("--remove", default="", metavar="A,B",
+                            help="comma-separated components to take out of the model, e.g. current_limit")
         parser.add_argument("--csv", metavar="FILE", help="write the time series (outputs and modes) as CSV")
         add_options(parser, plot="write the standard figure set (format from the extension)",
                     json="print the summary as JSON")
 
     def run(self, args) -> int:
-        from ..model import component_names
         from ..simulate import simulate
+        from ..structure import Structure
 
         effects = _parse_effects(args.effects)
+        remove = _parse_effects(args.remove, "--remove")
         check_output_files({"--csv": args.csv, "--plot": args.plot}, {"--config": args.config})
         params = load_params(args)
         if args.law is not None:
             params = params.replace(friction_law=args.law)
-        components = component_names(args.model, effects)  # checks the names before any work
-        resp = simulate(params, args.model, t_end=args.t_end, effects=effects, max_samples=args.max_samples)
+        structure = Structure(args.model, effects, remove)  # checks the names before any work
+        params = structure.apply(params)
+        components = structure.components()
+        resp = simulate(params, components=structure, t_end=args.t_end, max_samples=args.max_samples)
         if args.csv:
             resp.to_csv(args.csv)
         if args.plot:
@@ -67,7 +72,8 @@ class SimulateCommand(Command):
             print_json(s)
             return 0
         print(f"kilnctl simulate: {args.model} model, {s['t_end_s']:g} s, friction law '{params.friction_law}'"
-              + (f", effects {', '.join(effects)}" if effects else ""))
+              + (f", effects {', '.join(effects)}" if effects else "")
+              + (f", without {', '.join(remove)}" if remove else ""))
         print(f"  gains            k_p = {_gain(s['gains']['k_p'])} V/rpm, k_I = {_gain(s['gains']['k_I'])} V/(rpm*s), "
               f"k_D = {_gain(s['gains']['k_D'])} V*s/rpm")
         print(f"  peak current     {_fmt(s['peak_current_A'], ' A')}")
@@ -89,13 +95,13 @@ class SimulateCommand(Command):
 register = SimulateCommand.register
 
 
-def _parse_effects(text: str) -> tuple[str, ...]:
-    """Split ``A,B`` into component names; an empty item is an error."""
+def _parse_effects(text: str, flag: str = "--effects") -> tuple[str, ...]:
+    """Split ``A,B`` into names; an empty item is an error."""
     if not text.strip():
         return ()
     items = [s.strip() for s in text.split(",")]
     if any(not s for s in items):
-        raise SimulationError(f"--effects {text!r} has an empty name: give names separated by single commas")
+        raise SimulationError(f"{flag} {text!r} has an empty name: give names separated by single commas")
     return tuple(items)
 
 

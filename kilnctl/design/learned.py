@@ -22,8 +22,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import DesignError
-from ..gains import PIDGains
+from ..gains import PIDGains, resolve_gains
 from ..params import Parameters
+from ..structure import Structure, diagnosis_dict
 from .requirements import Requirements
 
 __all__ = ["LoopCheck", "check_gains", "retune", "Retuned", "learned_structure"]
@@ -148,16 +149,16 @@ def _rows(lin_a, lin_b, exclude=None):
 
 
 def check_gains(params: Parameters, components, gains: PIDGains | None = None,
-                requirements: Requirements | None = None, conditions=("stick", "slip"), _bases=None,
-                _exclude=None) -> LoopCheck:
+                requirements: Requirements | None = None, conditions=("stick", "slip")) -> LoopCheck:
     """Closed-loop modes of a structure with the given gains, both load conditions.
 
     Parameters
     ----------
     params : Parameters
         Parameters of the structure (e.g. a diagnosis' calibrated values).
-    components : sequence of str
-        The plant structure (see :func:`kilnctl.model.component_names`).
+    components : Structure or sequence of str
+        The plant structure (:class:`kilnctl.structure.Structure`, or the
+        component names of :func:`kilnctl.model.component_names`).
     gains : PIDGains, optional
         Gains to check (default: those of ``params`` after design resolution).
     requirements : Requirements, optional
@@ -169,27 +170,34 @@ def check_gains(params: Parameters, components, gains: PIDGains | None = None,
     -------
     LoopCheck
     """
-    from ..linearize import linearize
-    from ..simulate import resolve_gains
-
     params = resolve_gains(params)
-    if gains is None:
-        gains = PIDGains(params.k_p, params.k_I, params.k_D)
+    bases = _linearized(params, components, conditions)
+    return _check(bases, PIDGains(params.k_p, params.k_I, params.k_D) if gains is None else gains, requirements)
+
+
+def _linearized(params, components, conditions=("stick", "slip")):
+    """The structure linearized in each burden condition (the gains are swapped in later, exactly)."""
+    from ..linearize import linearize
+
+    return {c: linearize(params, components=components, burden=c) for c in conditions}
+
+
+def _check(bases, gains, requirements=None, exclude=None) -> LoopCheck:
+    """check_gains on structures already linearized (``bases``: condition -> LinearizedPlant); with
+    ``exclude`` (condition -> natural frequencies [rad/s]) only modes near those may count as not moved."""
     req = Requirements() if requirements is None else requirements
-    bases = _bases if _bases is not None else {c: linearize(params, components=components, burden=c)
-                                                for c in conditions}
     bumped = gains.scaled(1.01)
     modes = {}
     zmin = np.inf
-    for cond in conditions:
-        la = bases[cond].with_gains(gains.k_p, gains.k_I, gains.k_D)
-        lb = bases[cond].with_gains(bumped.k_p, bumped.k_I, bumped.k_D)
-        rows = _rows(la, lb, None if _exclude is None else _exclude.get(cond, []))
+    for cond, base in bases.items():
+        la = base.with_gains(gains.k_p, gains.k_I, gains.k_D)
+        lb = base.with_gains(bumped.k_p, bumped.k_I, bumped.k_D)
+        rows = _rows(la, lb, None if exclude is None else exclude.get(cond, []))
         modes[cond] = rows
         for r in rows:
             if r["moved"] and r["omega_n_rad_s"] > 0:
                 zmin = min(zmin, r["zeta"] if r["pole"].real <= 1e-9 else -np.inf)
-    return LoopCheck(gains, tuple(components), modes, float(zmin), req)
+    return LoopCheck(gains, tuple(next(iter(bases.values())).components), modes, float(zmin), req)
 
 
 @dataclass
@@ -261,7 +269,7 @@ def retune(params: Parameters, components, gains: PIDGains | None = None,
     ----------
     params : Parameters
         Parameters of the structure.
-    components : sequence of str
+    components : Structure or sequence of str
         The learned plant structure.
     gains : PIDGains, optional
         Starting gains (default: the rigid root-locus design for ``params``).
@@ -288,15 +296,11 @@ def retune(params: Parameters, components, gains: PIDGains | None = None,
     When no setting meets the requirement the gains are kept (``after is
     before``) and ``best_found`` says what the best setting would give.
     """
-    from ..simulate import resolve_gains
-
     params = resolve_gains(params)
     gains = PIDGains(params.k_p, params.k_I, params.k_D) if gains is None else gains
     req = Requirements() if requirements is None else requirements
-    from ..linearize import linearize
-
-    bases = {c: linearize(params, components=components, burden=c) for c in ("stick", "slip")}
-    before = check_gains(params, components, gains, req, _bases=bases)
+    bases = _linearized(params, components)
+    before = _check(bases, gains, req)
     # modes the reference gains barely act on (a drive-train resonance, the burden's pendulum) stay out of the
     # objective for every candidate: no gain damps them, and a loop mode must not drop out because slower
     # gains act on it less
@@ -309,8 +313,7 @@ def retune(params: Parameters, components, gains: PIDGains | None = None,
     for k in ks:
         for d in ds:
             g = PIDGains(k * gains.k_p, k * gains.k_I, k * d * gains.k_D)
-            scan.append((float(k), float(d), check_gains(params, components, g, req, _bases=bases,
-                                                         _exclude=exclude).zeta_min))
+            scan.append((float(k), float(d), _check(bases, g, req, exclude).zeta_min))
     # the rigid design is the fastest the requirements allow (omega_n cap, settling): on the learned structure
     # the gains are only ever slowed down; k_D may go either way. Among the settings that meet zeta_min: the
     # largest scale, then the k_D factor closest to 1; else the best damped
@@ -319,11 +322,11 @@ def retune(params: Parameters, components, gains: PIDGains | None = None,
             else max(scan, key=lambda x: x[2]))
     if not np.isfinite(best[2]) or best[2] < 0:
         raise DesignError("no scale of the gains gives a stable loop on this structure "
-                          f"({'+'.join(components)}); the PID structure itself has to change")
+                          f"({'+'.join(before.components)}); the PID structure itself has to change")
     if not meeting:  # nothing meets the requirement: keep the rigid design, and say what the best would give
         return Retuned(before, before, 1.0, 1.0, scan, best_found=best)
     new = PIDGains(best[0] * gains.k_p, best[0] * gains.k_I, best[0] * best[1] * gains.k_D)
-    after = check_gains(params, components, new, req, _bases=bases, _exclude=exclude)
+    after = _check(bases, new, req, exclude)
     return Retuned(before, after, best[0], best[1], scan)
 
 
@@ -332,8 +335,9 @@ def learned_structure(path, model: str | None = None, base: Parameters | None = 
 
     Parameters
     ----------
-    path : path-like
-        JSON written by ``kilnctl diagnose --json`` (or ``diagnose.json`` of its ``--report`` folder).
+    path : path-like, dict or Diagnosis
+        JSON written by ``kilnctl diagnose --json`` (or ``diagnose.json`` of its ``--report`` folder), its
+        content, or a fitted :class:`~kilnctl.measure.diagnose.Diagnosis`.
     model : str, optional
         Base model (default: the one the diagnosis used).
     base : Parameters, optional
@@ -342,7 +346,8 @@ def learned_structure(path, model: str | None = None, base: Parameters | None = 
 
     Returns
     -------
-    components : tuple of str
+    structure : Structure
+        The diagnosis' model with its selected effects.
     params : Parameters
         ``base`` with the diagnosis' final calibrated values and the selected effects' options.
     selected : list of str
@@ -353,28 +358,9 @@ def learned_structure(path, model: str | None = None, base: Parameters | None = 
     ConfigFileError
         The file is missing, not JSON, or not a diagnosis.
     """
-    import json
-    from pathlib import Path
-
-    from ..errors import ConfigFileError
-    from ..measure.effects import effect_components
-    from ..model import component_names
-
-    path = Path(path)
-    try:
-        d = json.loads(path.read_text())
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ConfigFileError(f"--model-from {path}: cannot read it ({exc.__class__.__name__}): give the JSON "
-                              "that 'kilnctl diagnose --json' printed, saved to a file") from None
-    except ValueError as exc:
-        raise ConfigFileError(f"--model-from {path}: not JSON ({exc}): give the JSON that 'kilnctl diagnose "
-                              "--json' printed") from None
-    if not isinstance(d, dict) or "selected" not in d or "final_parameters" not in d:
-        raise ConfigFileError(f"--model-from {path}: not a diagnosis (no 'selected' / 'final_parameters'): give "
-                              "the JSON that 'kilnctl diagnose --json' printed")
-    model = model or d.get("settings", {}).get("model") or "macro"
+    d = diagnosis_dict(path)
+    structure = Structure.from_diagnosis(d, model)
     values = {k: v["value"] for k, v in d["final_parameters"].items() if isinstance(v, dict) and "value" in v}
     base = Parameters() if base is None else base
     params = base.replace(**values) if values else base
-    extra, params = effect_components(list(d["selected"]), params, model)
-    return component_names(model, extra), params, list(d["selected"])
+    return structure, structure.apply(params), list(structure.effects)

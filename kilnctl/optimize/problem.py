@@ -30,6 +30,7 @@ import numpy as np
 from ..errors import ParameterError
 from ..model.ramps import pwl_component, scurve_timing
 from ..params import Parameters
+from ..structure import PRESETS, Structure
 
 __all__ = ["Profile", "Scenario", "RampProblem", "default_scenarios", "OBJECTIVES", "SETTLE_MARGIN_S"]
 
@@ -332,11 +333,13 @@ class RampProblem:
         the ``constant`` rate, the S-curve's acceleration.  Default: the
         profile's own bound (2000 rpm/s).  Use it to forbid a ramp that creeps
         and then jumps (the optimum may do that: the result's notes say so).
-    effects : sequence of str, default ()
+    effects : sequence of str or Structure, default ()
         Mode-free effects on the micro model, in the smooth model and the
         hybrid verification alike (a structure a diagnosis learned:
         ``second_motor``, ``speed_sensor_lag``, ``kiln_unbalance``,
-        ``viscous_drag``).
+        ``viscous_drag``), or a micro :class:`kilnctl.structure.Structure`
+        (its added components become the effects, its options are set on
+        ``params``).
 
     Raises
     ------
@@ -361,6 +364,13 @@ class RampProblem:
         self.profile = Profile.parse(self.profile)
         from .model import check_effects
 
+        if isinstance(self.effects, Structure):
+            s = self.effects
+            if s.model != "micro" or s.remove:
+                raise ParameterError(f"effects = Structure {s}: the ramp is optimized on the micro model with "
+                                     "effects added (none removed): use Structure('micro', ...)")
+            self.params = s.apply(self.params)
+            self.effects = tuple(c for c in s.components() if c not in PRESETS["micro"].components())
         self.effects = check_effects(self.effects)
         self.t_max = _positive("t_max", self.t_max)
         self.horizon = self.t_max + SETTLE_MARGIN_S if self.horizon is None else _positive("horizon", self.horizon)

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 
 from ..params import Parameters
 
-__all__ = ["WorstPoint", "confirm_worst", "AGREEMENT"]
+__all__ = ["WorstPoint", "confirm_worst", "reproduce_command", "AGREEMENT"]
 
 #: relative agreement required between the sweep's value and the CVODES re-run (the documented
 #: accuracy of a default run for peaks, see simulate())
@@ -122,8 +122,7 @@ def confirm_worst(study, result, output: str | None = None, rtol: float = 1e-10)
     options = {**study.options, "method": "cvodes", "rtol": rtol, "atol": rtol / 10}
     ref, err = None, ""
     try:
-        resp = simulate(params, study.model, t_end=study.t_end, effects=study.effects, remove=study.remove,
-                        **options)
+        resp = simulate(params, components=study.structure, t_end=study.t_end, **options)
         ref = study.custom_outputs[output](resp) if output in study.custom_outputs else resp.summary().get(output)
         ref = None if ref is None else float(ref)
     except KilnctlError as exc:
@@ -131,6 +130,33 @@ def confirm_worst(study, result, output: str | None = None, rtol: float = 1e-10)
     agree = ref is not None and math.isfinite(ref) and abs(value - ref) <= AGREEMENT * abs(ref)
     variables = {v: (float(ok.at[idx, v]) if not isinstance(ok.at[idx, v], str) else ok.at[idx, v])
                  for v in result.variables}
-    eff = f" --effects {','.join(study.effects)}" if study.effects else ""
-    command = f"kilnctl simulate --model {study.model} --t-end {study.t_end:g}{eff} --config worst.toml --json"
-    return WorstPoint(output, idx, variables, value, ref, agree, _setup_toml(params), command, err)
+    return WorstPoint(output, idx, variables, value, ref, agree, _setup_toml(params), reproduce_command(study),
+                      err)
+
+
+def reproduce_command(study, config: str = "worst.toml") -> str:
+    """The ``kilnctl simulate`` command that runs one point of ``study`` from its setup file.
+
+    Parameters
+    ----------
+    study : Study
+        The study (its structure, horizon and options).
+    config : str, default 'worst.toml'
+        Name of the setup file holding the point's parameters.
+
+    Returns
+    -------
+    str
+        The command; study options ``kilnctl simulate`` cannot take (``dt``,
+        ``rtol`` ...) are named after it, for a run from Python.
+    """
+    flags = f" --effects {','.join(study.effects)}" if study.effects else ""
+    flags += f" --remove {','.join(study.remove)}" if study.remove else ""
+    if study.options.get("max_samples") is not None:
+        flags += f" --max-samples {study.options['max_samples']}"
+    command = f"kilnctl simulate --model {study.model} --t-end {study.t_end!r}{flags} --config {config} --json"
+    other = {k: v for k, v in study.options.items() if k != "max_samples"}
+    if other:
+        command += (" (and the study's options " + ", ".join(f"{k}={v!r}" for k, v in other.items())
+                    + ", which kilnctl simulate does not take: pass them to kilnctl.simulate.simulate in Python)")
+    return command

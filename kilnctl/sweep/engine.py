@@ -65,8 +65,8 @@ def run_point(task: dict) -> dict:
 
     rec = {"key": task["key"], "status": "ok", "error": "", "summary": {}, "custom": {}}
     try:
-        resp = simulate(Parameters(task["params"]), task["model"], t_end=task["t_end"],
-                        effects=task["effects"], remove=task["remove"], **task["options"])
+        resp = simulate(Parameters(task["params"]), components=task["structure"], t_end=task["t_end"],
+                        **task["options"])
         rec["summary"] = resp.summary()
         rec["custom"] = {k: float(f(resp)) for k, f in task["custom"].items()}
     except KilnctlError as exc:

@@ -25,6 +25,7 @@ import numpy as np
 
 from ..errors import ParameterError, close_matches_hint
 from ..params import SPECS, Parameters
+from ..structure import Structure
 from .result import OUTPUTS
 from .space import Space
 
@@ -73,15 +74,17 @@ class Study:
         Keys of :data:`OUTPUTS` (summary values of each run), or a mapping from
         a column name to a function ``f(response) -> float`` (module-level, so
         worker processes can import it) for anything else.
-    model : {'macro', 'micro'}, default 'micro'
-        Plant of the paper to simulate at each point.
+    model : {'macro', 'micro'} or Structure, default 'micro'
+        Plant of the paper to simulate at each point, or a
+        :class:`kilnctl.structure.Structure` (then without ``effects`` and
+        ``remove``).
     t_end : float, default 40.0
         Simulated time of each start-up [s].
     base : Parameters, optional
         Parameters the space varies (default: the paper's Table 1).
     effects, remove : sequence of str
-        Components to add to or take out of the model (as in
-        :func:`kilnctl.simulate.simulate`).
+        Effects (catalogue or component names) to add to the model, and
+        components to take out of it (as in :class:`kilnctl.structure.Structure`).
     factors : mapping of str to sequence of str, optional
         Factor variables: ``{"friction": ("mu_c", "mu_s")}`` makes the variable
         ``friction`` [-] multiply the base values of both coefficients, so they
@@ -121,7 +124,6 @@ class Study:
                  factors: Mapping[str, Sequence[str]] | None = None, options: Mapping | None = None,
                  name: str = "sweep", redesign: bool = False, max_points: int | None = None):
         from ..budget import check_points
-        from ..model import component_names
 
         if not isinstance(space, Space):
             raise ParameterError(f"space must be a Grid, LatinHypercube or MonteCarlo, not {type(space).__name__}")
@@ -130,10 +132,15 @@ class Study:
         self.base = Parameters() if base is None else base
         if not isinstance(self.base, Parameters):
             raise ParameterError(f"base must be a kilnctl.Parameters, not {type(self.base).__name__}")
-        self.model = model
-        self.effects = tuple(effects)
-        self.remove = tuple(remove)
-        component_names(model, self.effects, self.remove)  # checks model and component names
+        if isinstance(model, Structure):
+            if effects or remove:
+                raise ParameterError("give the effects inside the Structure (Structure.with_effects), not as "
+                                     "effects= or remove= beside it")
+            self.structure = model
+        else:
+            self.structure = Structure(model, tuple(effects), tuple(remove))  # checks model and names
+        #: the structure's parts, as the cache key and the reproduce command name them
+        self.model, self.effects, self.remove = self.structure.model, self.structure.effects, self.structure.remove
         if isinstance(t_end, bool) or not isinstance(t_end, (int, float)) or not math.isfinite(t_end) or t_end <= 0:
             raise ParameterError(f"t_end = {t_end!r} must be a finite number of seconds > 0")
         self.t_end = float(t_end)
@@ -179,7 +186,6 @@ class Study:
 
     def _check_run_size(self):
         """Refuse a start-up too long for memory before the first point is built (same check as simulate)."""
-        from ..model import component_names
         from ..simulate import DEFAULT_DT, _check_horizon, _check_size
 
         opt = self.options
@@ -188,7 +194,7 @@ class Study:
         events = opt.get("max_events", 5000)
         events = events if isinstance(events, int) and not isinstance(events, bool) and events > 0 else 0
         # n_grid, rtol, atol do not change the plant's size: the defaults serve (a bad value fails at the point)
-        _check_size(component_names(self.model, self.effects, self.remove), self.base, self.t_end, dt, events,
+        _check_size(self.structure.components(), self.base, self.t_end, dt, events,
                     opt.get("max_samples"), 500, 1e-7, 1e-8, t_end_name="t_end",
                     limit_name="max_samples = N in [options] of the spec (Study(options={'max_samples': N})")
 
@@ -310,8 +316,8 @@ class Study:
         Returns
         -------
         dict
-            ``key`` (cache key), ``params`` (dict), ``model``, ``t_end`` [s],
-            ``effects``, ``remove``, ``options`` and ``custom`` outputs.
+            ``key`` (cache key), ``params`` (dict), ``structure``, ``t_end`` [s],
+            ``options`` and ``custom`` outputs.
         """
         ident = {
             "format": 1,
@@ -327,8 +333,8 @@ class Study:
         }
         text = json.dumps(ident, sort_keys=True, allow_nan=False)
         return {"key": hashlib.sha256(text.encode()).hexdigest()[:32], "params": ident["params"],
-                "model": self.model, "t_end": self.t_end, "effects": self.effects, "remove": self.remove,
-                "options": self.options, "custom": self.custom_outputs}
+                "structure": self.structure, "t_end": self.t_end, "options": self.options,
+                "custom": self.custom_outputs}
 
     def describe(self) -> str:
         """Return a few lines saying what the study runs.
