@@ -5,8 +5,20 @@ rotary kiln system used for iron production" (1994).
 """
 
 from . import gains as _gains
+from . import params as _params
 from .errors import KilnctlError
 from .params import Parameters
+
+
+def _components():
+    """The component registry, for the parameter declarations (``kilnctl.params.SPECS``).
+
+    Importing :mod:`kilnctl.model` registers every component; the root wires
+    it in because ``params`` sits below the model that imports it.
+    """
+    from .model.base import REGISTRY
+
+    return REGISTRY
 
 
 def _design_gains(params):
@@ -21,6 +33,7 @@ def _design_gains(params):
     return gains_for(params)
 
 
+_params._registry_loader = _components
 _gains.use_designer(_design_gains)
 
 __all__ = ["KilnctlError", "Parameters"]

@@ -36,8 +36,8 @@ import tomli_w
 from .errors import ConfigFileError, ParameterError, close_matches_hint
 from .files import read_toml, write_atomic
 
-__all__ = ["ParamSpec", "Parameters", "SPECS", "GROUPS", "param", "RegistryView", "Implausible", "plausibility",
-           "check_plausible", "HARD_FACTOR", "SLIP_FACTOR"]
+__all__ = ["ParamSpec", "Parameters", "SPECS", "GROUPS", "param", "RegistryView", "Implausible",
+           "plausibility", "check_plausible", "HARD_FACTOR", "SLIP_FACTOR"]
 
 #: rules a numeric value may be held to
 _RULES = {
@@ -117,6 +117,19 @@ def param(name: str, default: float | str, unit: str, source: str, description: 
     return ParamSpec(name, default, unit, source, description, group, rule, tuple(choices))
 
 
+#: returns the component registry (name -> component class).  This module sits below kilnctl.model (whose
+#: components import it), so it is handed the registry instead of importing it: the package root
+#: (kilnctl/__init__.py, run before any kilnctl module) sets a loader that imports kilnctl.model, which
+#: registers every component, and returns kilnctl.model.REGISTRY
+_registry_loader = None
+
+
+def _component_registry() -> dict:
+    if _registry_loader is None:
+        raise ParameterError("no component registry is set: import kilnctl (its root sets it)")
+    return _registry_loader()
+
+
 class RegistryView(Mapping):
     """A read-only table derived from the component registry, rebuilt when a component is registered.
 
@@ -132,8 +145,7 @@ class RegistryView(Mapping):
         self._size = -1
 
     def _current(self) -> dict:
-        from .model.base import REGISTRY  # importing kilnctl.model registers every component
-
+        REGISTRY = _component_registry()
         if self._size != len(REGISTRY):
             self._table, self._size = self._build(REGISTRY), len(REGISTRY)
         return self._table

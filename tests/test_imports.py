@@ -7,11 +7,14 @@ the failure to run time).  Imports under ``if TYPE_CHECKING:`` are left out:
 they never run (annotations only).
 
 What it does not see: a dependency that is passed in rather than imported.
-There is one on purpose: designed PID gains (``gains = "design"``) are
-computed by :mod:`kilnctl.design`, which sits above the simulator; the package
-root (``kilnctl/__init__.py``) plugs :func:`kilnctl.design.gains_for` into
-:func:`kilnctl.gains.use_designer`, and the simulator asks
-:func:`kilnctl.gains.resolve_gains`.  The root is the composition root: its own
+There are two on purpose, both wired by the package root
+(``kilnctl/__init__.py``): designed PID gains (``gains = "design"``) are
+computed by :mod:`kilnctl.design`, which sits above the simulator, so the root
+plugs :func:`kilnctl.design.gains_for` into :func:`kilnctl.gains.use_designer`
+and the simulator asks :func:`kilnctl.gains.resolve_gains`; and the parameter
+declarations (``kilnctl.params.SPECS``) are read from the components that
+import ``params``, so the root hands ``params`` a loader of the component
+registry (``kilnctl.params._registry_loader``).  The root is the composition root: its own
 imports wire the layers and are exempt from the layer order (not from the cycle
 check); imports *of* the root add no dependency, because Python runs the root
 before any kilnctl module anyway.
