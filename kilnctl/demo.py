@@ -1,4 +1,4 @@
-"""The main job behind ``make demo``: design, verify, optimize, diagnose, with figures.
+"""The main job behind ``make demo``: design, verify, optimize, diagnose, close the loop, with figures.
 
 Run as ``python -m kilnctl.demo --out DIR``.  Each step prints what it found
 and writes its figures into ``DIR``:
@@ -12,8 +12,11 @@ and writes its figures into ``DIR``:
 4. the start-up ramp that lowers the start-up (dynamic) gear stress
    (``ramp_optimization.png``, the report ``ramp/optimize_ramp.html``);
 5. the diagnosis of the example measurement (``diagnose/diagnose.html``);
-6. the gains of step 2 checked (and retuned) on the structure the diagnosis
-   learned (:mod:`kilnctl.design.learned`).
+6. the loop closed on the structure the diagnosis learned
+   (:mod:`kilnctl.close_loop`): the gains of step 2 checked and redesigned on
+   its exact linearization, both verified on its hybrid plant, the ramp
+   optimized on it (``close_the_loop.png``, ``close_the_loop.csv``,
+   ``close_the_loop.md``).
 """
 
 from __future__ import annotations
@@ -21,6 +24,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import textwrap
 import time
 from pathlib import Path
 
@@ -135,20 +139,27 @@ def main(argv=None) -> int:
     diagnose_example(out, progress=lambda line: print("  " + line))
     print(f"  ({time.perf_counter() - t0:.1f} s)")
 
-    # --- close the loop: the designed gains on the model the measurement taught ---------------
-    t0 = _step("6. Close the loop: the gains of step 2 on the model the measurement taught")
-    from .design.learned import learned_structure, retune
+    # --- close the loop: redesign, verify and optimize on the model the measurement taught ---------
+    t0 = _step("6. Close the loop: redesign, verify and optimize on the model the measurement taught")
+    from .close_loop import close_the_loop
+    from .measure import example_paths, load_setup
 
-    comps, learned, selected = learned_structure(out / "diagnose" / "diagnose.json")
-    g = design.gains
-    learned = learned.replace(gains="given", k_p=g.k_p, k_I=g.k_I, k_D=g.k_D)
-    r = retune(learned, comps, g)
-    print(f"  learned structure: the macro model with {', '.join(selected) or 'nothing added'}, calibrated values "
-          f"from step 5 (kilnctl design --model-from {out / 'diagnose' / 'diagnose.json'} does the same)")
-    print("  " + r.summary().split("\n\n")[0])
-    print("  rigid gains: " + r.before.verdict())
-    if r.after is not r.before:
-        print("  retuned:     " + r.after.verdict())
+    rec_path, setup_path = example_paths()
+    study = close_the_loop(out / "diagnose" / "diagnose.json", base=load_setup(setup_path).params,
+                           rigid_gains=design.gains, record=rec_path.name)
+    f = out / "diagnose" / "diagnose.json"
+    print("  The gains of step 2 are checked on the exact linearization of the structure step 5 learned and redesigned\n"
+          "  there; both are run on the hybrid plant with that structure, then the ramp is optimized on it. One by one:\n"
+          f"    kilnctl design --model-from {f}\n    kilnctl verify --model-from {f} --model micro\n"
+          f"    kilnctl optimize-ramp --model-from {f} --profile scurve --objective dynamic\n")
+    for line in study.summary().split("\n"):
+        print(textwrap.fill(line, 116, initial_indent="  ", subsequent_indent="    "))
+    print()
+    print("  " + study.to_text().replace("\n", "\n  "))
+    study.to_csv(out / "close_the_loop.csv")
+    (out / "close_the_loop.md").write_text(study.to_markdown())
+    print(f"  wrote {out / 'close_the_loop.csv'}, {out / 'close_the_loop.md'}")
+    _save(study.plot(), out / "close_the_loop.png")
     print(f"  ({time.perf_counter() - t0:.1f} s)")
 
     print(f"\nDone: figures and data in {out}/")
