@@ -42,7 +42,7 @@ LAYERS = (
     ("response", "simulate"),
     ("linear", "linearize"),
     ("design", "verify", "optimize", "measure", "sweep", "structure"),
-    ("report", "pages", "assumptions"),
+    ("report", "pages", "assumptions", "close_loop"),
     ("cli", "demo", "demo_ramp"),
 )
 LAYER = {unit: i for i, names in enumerate(LAYERS) for unit in names}
