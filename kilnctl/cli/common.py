@@ -43,7 +43,7 @@ class Command:
 
     #: the subcommand's name
     name = ""
-    #: one line for ``kilnctl --help`` (an option help: a literal percent sign is written %%)
+    #: one line for ``kilnctl --help`` (argparse %-formats it: a literal percent sign is written %%)
     help = ""  # noqa: A003 - argparse's own word
 
     @classmethod
