@@ -404,7 +404,8 @@ def close_the_loop(source, params: Parameters | None = None, *, selected=None, b
     seconds = {}
     t0 = time.perf_counter()
     if isinstance(source, (str, Path)):
-        comps, lp, sel = learned_structure(source, base=base)
+        structure, lp, sel = learned_structure(source, base=base)
+        comps = structure.components()
     else:
         if params is None:
             raise ParameterError("close_the_loop: with a component list as source, give params (the calibrated "

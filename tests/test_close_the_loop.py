@@ -144,3 +144,19 @@ def test_bad_input_is_refused_with_the_fix():
         close_the_loop(comps, Parameters())
     with pytest.raises(KilnctlError, match="--model-from"):
         close_the_loop("/nonexistent/diagnose.json")
+
+
+def test_a_diagnosis_file_gives_the_same_loop_as_its_components_and_values(study, tmp_path):
+    # truth: the module's study, built from the explicit component list and values; a diagnosis JSON with the
+    # same selected effect and the same calibrated values (the keys kilnctl diagnose --json writes) must give
+    # the same redesigned gains (make demo takes this path: a Structure from the file, not a tuple)
+    import json
+
+    d = {"selected": ["second_motor"], "settings": {"model": "macro"}, "baseline": {},
+         "final_parameters": {k: {"value": getattr(PARAMS, k)} for k in ("J_m2", "m_v", "mu_c", "mu_s")}}
+    f = tmp_path / "diagnose.json"
+    f.write_text(json.dumps(d))
+    from_file = close_the_loop(f, record="test")
+    assert from_file.components == study.components
+    a, b = from_file.retuned.after.gains, study.retuned.after.gains
+    assert (a.k_p, a.k_I, a.k_D) == pytest.approx((b.k_p, b.k_I, b.k_D), rel=1e-9)
