@@ -1,0 +1,125 @@
+"""Motor-side Coulomb friction: brushes and bearings on the motor shaft (an effect added by name).
+
+A torque of constant size T_cm [N*m] opposes the motor's rotation
+(``simulate(..., effects=("motor_coulomb_friction",))``, ``--effects
+motor_coulomb_friction``):
+
+============  ==============  =====================================================
+mode          motor speed     friction torque on the motor shaft
+============  ==============  =====================================================
+``slip_pos``  omega_m > 0     -T_cm
+``slip_neg``  omega_m < 0     +T_cm
+``stick``     omega_m = 0     T_cm*(2u - 1), whatever in [-T_cm, T_cm] holds it
+============  ==============  =====================================================
+
+Sticking is Coulomb friction's Filippov solution, built like the current
+limit's sliding modes: u in [0, 1] is the plant's equivalent control that
+keeps omega_m at zero (:meth:`kilnctl.model.assembly.Eqs.equivalent_control`).
+The shaft breaks away (event ``sliding_end``) when holding it would take more
+than T_cm, i.e. when even -T_cm lets it accelerate forwards or even +T_cm
+backwards, and re-sticks (``restick``) when its speed returns to zero.  At
+rest at t = 0 the motor starts in ``stick`` and turns once k_i*i_a exceeds
+T_cm plus what the drive train asks of the shaft at standstill.  Sticking is
+modelled rather than regularised because the start-up delay it causes is
+part of the signature.
+
+``motor_coulomb_friction_smooth`` is its twin for the ramp optimizer:
+-T_cm*tanh(omega_m/MOTOR_FRICTION_OMEGA), a creep below 0.01 rad/s
+(0.02 % of the 52 rad/s running speed).
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+
+from ..params import param
+from .base import Component, Guard, register
+from .catalogue import Effect, FreeParameter
+
+#: motor speed over which the smooth twin regularises the friction's sign, and the scale of the stick guards
+#: [rad/s]
+MOTOR_FRICTION_OMEGA = 1e-2
+
+
+@register
+class MotorCoulombFriction(Component):
+    """Coulomb friction of brushes and bearings on the motor shaft, with sticking (see the module docstring).
+
+    Torque -T_cm*sign(omega_m) on the node ``motor`` while it turns; at rest
+    whatever in [-T_cm, T_cm] holds it (Filippov).  Output ``T_fm`` [N*m]:
+    the friction torque on the shaft.
+    """
+
+    name = "motor_coulomb_friction"
+    summary = "Coulomb friction T_cm of brushes and bearings against the motor speed, with sticking"
+    param_names = ("T_cm",)
+    requires = ("dc_motor",)
+    modes = ("stick", "slip_pos", "slip_neg")
+    smooth_twin = "motor_coulomb_friction_smooth"
+    phase_after = "second_motor"
+    parameters = (
+        param("T_cm", 40.0, "N*m", "assumed: about 1 % of the 3.9 kN*m running motor torque (k_i x 840 A), usual "
+              "for the brush and bearing friction of a large DC machine",
+              "Coulomb friction torque on the motor shaft (component 'motor_coulomb_friction')", "effects",
+              "nonnegative"),
+    )
+    catalogue = (
+        Effect(
+            "motor_coulomb_friction",
+            "Brush and bearing friction on the motor shaft: a torque of constant size T_cm against the motor's "
+            "rotation, which holds the shaft at rest until the drive torque exceeds it.",
+            ("motor_coulomb_friction",), {}, None,
+            (FreeParameter("T_cm", 0.0, 2000.0, "lin", 40.0),),
+            "current above the model by T_cm/k_i (9 A with 40 N*m) as soon as the motor turns, the same along "
+            "the ramp and at steady speed (a viscous drag instead grows with the speed), and a motor that "
+            "starts a little late, once the current has reached T_cm/k_i",
+            starts=lambda params, m: [{"T_cm": 20.0}, {"T_cm": 60.0}, {"T_cm": 200.0}],
+            plausible={"T_cm": (10.0, 100.0)}, null={"T_cm": 0.0}),
+    )
+
+    def initial_mode(self, params, x0):
+        w = x0.get("omega_motor", 0.0)
+        return "stick" if w == 0 else ("slip_pos" if w > 0 else "slip_neg")
+
+    def loads(self, e, mode):
+        T_cm = e.p.T_cm
+        if mode == "stick":
+            u = e.sig["u_motor_stick"] = e.equivalent_control(self.name)
+            T = T_cm * (2 * u - 1)
+        else:
+            T = -T_cm if mode == "slip_pos" else T_cm
+        e.add_torque("motor", T)
+        e.sig["T_fm"] = T
+
+    def finish(self, e, mode):
+        w = e.x["omega_motor"] / MOTOR_FRICTION_OMEGA
+        if mode == "stick":
+            # u = 0 (-T_cm) and still accelerating forwards: break away forwards; u = 1 and still backwards
+            e.hold_constant(e.sig["u_motor_stick"], w, below="slip_pos", above="slip_neg", component=self.name)
+        elif mode == "slip_pos":
+            e.add_guard(Guard("restick", self.name, w, "stick"))
+        else:
+            e.add_guard(Guard("restick", self.name, -w, "stick"))
+        e.add_output("T_fm", e.sig["T_fm"])
+
+
+@register
+class MotorCoulombFrictionSmooth(MotorCoulombFriction):
+    """Motor Coulomb friction with the sign regularised: -T_cm*tanh(omega_m/0.01 rad/s), no modes."""
+
+    name = "motor_coulomb_friction_smooth"
+    summary = "motor Coulomb friction -T_cm*tanh(omega_m/omega_eps), for the optimizer"
+    replaces = ("motor_coulomb_friction",)
+    modes = ()
+    smooth_twin = None
+
+    def initial_mode(self, params, x0):
+        return None
+
+    def loads(self, e, mode):
+        T = -e.p.T_cm * ca.tanh(e.x["omega_motor"] / MOTOR_FRICTION_OMEGA)
+        e.add_torque("motor", T)
+        e.sig["T_fm"] = T
+
+    def finish(self, e, mode):
+        e.add_output("T_fm", e.sig["T_fm"])
