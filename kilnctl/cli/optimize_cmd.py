@@ -59,10 +59,11 @@ class OptimizeRampCommand(Command):
                             help="largest rate of the reference [rpm/s] (every pwl segment, the constant rate, the "
                                  "S-curve's acceleration); default 2000. Forbids a ramp that creeps and then jumps")
         add_options(parser,
-                    effects="mode-free effects on the micro model, in the optimization and the verification "
-                            "(second_motor, speed_sensor_lag, kiln_unbalance, viscous_drag)",
+                    effects="effects on the micro model, in the optimization (an effect with modes as its smooth "
+                            "twin) and the verification (second_motor, speed_sensor_lag, kiln_unbalance, "
+                            "viscous_drag, motor_coulomb_friction)",
                     model_from="optimize on the effects and calibrated values a diagnosis learned ('kilnctl diagnose "
-                               "--json' output saved to a file); its effects must be mode-free",
+                               "--json' output saved to a file); its effects must be mode-free or have a smooth twin",
                     json="print the result as JSON", quiet="no progress lines on stderr (--json implies it)")
 
     def run(self, args) -> int:

@@ -334,12 +334,13 @@ class RampProblem:
         profile's own bound (2000 rpm/s).  Use it to forbid a ramp that creeps
         and then jumps (the optimum may do that: the result's notes say so).
     effects : sequence of str or Structure, default ()
-        Mode-free effects on the micro model, in the smooth model and the
-        hybrid verification alike (a structure a diagnosis learned:
+        Effects on the micro model, in the smooth model and the hybrid
+        verification alike (a structure a diagnosis learned:
         ``second_motor``, ``speed_sensor_lag``, ``kiln_unbalance``,
-        ``viscous_drag``), or a micro :class:`kilnctl.structure.Structure`
-        (its added components become the effects, its options are set on
-        ``params``).
+        ``viscous_drag``; one with modes needs a smooth twin, which the
+        smooth model then carries: ``motor_coulomb_friction``), or a micro
+        :class:`kilnctl.structure.Structure` (its added components become
+        the effects, its options are set on ``params``).
 
     Raises
     ------
