@@ -30,7 +30,7 @@ import numpy as np
 from .errors import EventStormError, ModelError, ParameterError, SimulationError, close_matches_hint
 from .gains import resolve_gains
 from .model import Guard, component_names, get_plant
-from .model.stepper import GUARD_EPS, STATUS
+from .model.stepper import FIRST_STEP, GUARD_EPS, RUNAWAY, STATUS
 from .params import Parameters
 from .response import Event, Response
 
@@ -40,12 +40,11 @@ __all__ = ["simulate", "resolve_gains", "plant_structure", "DEFAULT_DT"]
 #: a guard on its boundary counts as crossed at once when its rate takes it past -GUARD_EPS within
 #: this time [s]; slower (grazing) guards are left to the integrator's crossing detection
 GUARD_LOOKAHEAD = 1e-3
-#: a scaled state beyond this is a runaway (the loop is unstable), reported as an error
-RUNAWAY = 1e6
 #: samples the compiled stepper returns per call; when full, the run continues from the last accepted
 #: step (results do not depend on this number: tests/test_differential.py)
 OUTPUT_BUFFER = 16384
-#: default output and guard-sampling step per model [s]
+#: default output and guard-sampling step per model [s] (the one definition: the sweeps and the measurement
+#: runner use it; the compiled stepper gets it as its output grid)
 DEFAULT_DT = {"macro": 5e-3, "micro": 1e-3}
 
 
@@ -244,7 +243,12 @@ class _Engine:
                               f"(last: {switched[-1][1]} -> {switched[-1][2]})")
 
     def locate(self, mf, j, t0, x0, t1, g0, g1):
-        """Time and state where guard j crosses zero in (t0, t1] (Illinois method)."""
+        """Time and state where guard j crosses zero in (t0, t1] (Illinois method).
+
+        The compiled stepper has its own Illinois iteration in rosenbrock.c.  The two are kept apart on
+        purpose: each engine locates events its own way, so when they agree (tests/test_engines_agree.py,
+        tests/test_differential.py) neither shares the other's mistakes.
+        """
         P = self.P
 
         def state_at(tt):
@@ -291,38 +295,110 @@ class _Engine:
             self.pairs[(gd.component, m_from[i], m_to[i])] += 1
 
     # --- main loop -------------------------------------------------------------
-    def run_stepped(self, xs, mode, t_end, dt, rtol, atol, hmax):
-        """Main loop on the compiled ROS3P steppers (guards checked after every step)."""
+    def run(self, xs, mode, t_end, advance):
+        """The stepping loop of both engines: settle the initial mode, then advance and switch until t_end.
+
+        ``advance(mf, t, xs)`` integrates mode ``mf`` from (t, xs) for one engine call and returns
+        ``(t, xs, event)``: where it stopped, and ``(te, xe, j)`` when guard j fired at (te, xe), else
+        None; it records the samples it passed.
+        """
         plant = self.plant
         t = 0.0
         mode, xs, switched = self.settle(mode, xs, t)
         self.log(switched, t)
         self.record(plant.functions(mode), np.array([t]), xs[:, None])
-        h = 0.0
         while t < t_end * (1 - 1e-12):
             mf = plant.functions(mode)
+            t, xs, event = advance(mf, t, xs)
+            if event is not None:
+                mode, xs, t = self.switch(mode, mf, *event)
+        return mode
+
+    def ros3p(self, t_end, dt, rtol, atol, hmax):
+        """``advance`` on the compiled ROS3P steppers (guards checked after every step, crossings located in C).
+
+        The C stepper locates a crossing with its own Illinois iteration and :meth:`locate` does it again in
+        Python for CVODES: kept apart on purpose, so the two engines check each other
+        (tests/test_engines_agree.py) instead of sharing one root finder's mistakes.
+        """
+        h = 0.0  # step size carried across calls; 0 after a switch: start again from FIRST_STEP
+
+        def advance(mf, t, xs):
+            nonlocal h
             if mf.stepper is None:
                 raise SimulationError("method 'ros3p' needs a C compiler (gcc or $CC); use method='cvodes'")
-            r = mf.stepper.run(self.P, t, t_end, xs, dt, rtol, atol, hmax, h, self.event_tol, max_out=OUTPUT_BUFFER,
-                               runaway=RUNAWAY, guard_eps=GUARD_EPS)
+            r = mf.stepper.run(self.P, t, t_end, xs, dt, rtol, atol, hmax, h if h > 0 else FIRST_STEP,
+                               self.event_tol, max_out=OUTPUT_BUFFER, runaway=RUNAWAY, guard_eps=GUARD_EPS)
             st = r["status"]
             if st == -6:
-                self.check_bounded(np.zeros((len(xs), 0)), r["x_ev"], r["t_ev"], mode)
+                self.check_bounded(np.zeros((len(xs), 0)), r["x_ev"], r["t_ev"], mf.mode)
             self.record(mf, r["t"], r["x"])
             self.n_steps += r["n_steps"]
             if st < 0:
                 raise SimulationError(
-                    f"integrator failed after t = {t:.6g} s in mode {plant.mode_dict(mode)}: {STATUS.get(st, st)} "
-                    "(the loop is probably unstable with these gains or parameters)")
-            te, xe, h = r["t_ev"], r["x_ev"], r["h"]
-            if st == 0:
-                break
-            if st == 2:
-                t, xs = te, xe
-                continue
-            mode, xs, t = self.switch(mode, mf, te, xe, r["j_ev"])
+                    f"integrator failed after t = {t:.6g} s in mode {self.plant.mode_dict(mf.mode)}: "
+                    f"{STATUS.get(st, st)} (the loop is probably unstable with these gains or parameters)")
+            h = r["h"]
+            if st == 0:  # reached t_end
+                return t_end, r["x_ev"], None
+            if st == 2:  # output buffer full: continue from the last accepted step
+                return r["t_ev"], r["x_ev"], None
             h = 0.0
-        return mode
+            return r["t_ev"], r["x_ev"], (r["t_ev"], r["x_ev"], r["j_ev"])
+
+        return advance
+
+    def cvodes(self, t_end, dt):
+        """``advance`` on CVODES chunks of n_grid*dt seconds (guards sampled on the output grid)."""
+        n = self.plant.n_grid
+        frac = np.linspace(0.0, 1.0, n + 1)[1:]
+        T_long = n * dt
+
+        def advance(mf, t, xs):
+            # chunks start on the global grid k*dt (after an event: one step to the next grid point)
+            t_grid = math.ceil(t / dt * (1 - 1e-14)) * dt
+            partial = t_grid - t > 1e-12 * max(1.0, t)
+            T = min(t_grid - t, t_end - t) if partial else min(T_long, t_end - t)
+            try:
+                if partial:
+                    X = np.asarray(mf.integ_one(x0=xs, p=np.concatenate([[t, T], self.P]))["xf"])
+                    Gd = self.guards(mf, X[:, 0], t + T)[0][:, None]
+                else:
+                    Xd, Gd = mf.step(xs, [t, T], self.P)
+                    X = np.asarray(Xd)
+            except RuntimeError as exc:
+                lines = str(exc).splitlines()
+                why = next((ln.strip() for ln in lines if "CVode returned" in ln or "CV_" in ln), lines[-1])
+                hint = (" (CVODES gave up: the loop is probably unstable with these gains or parameters)"
+                        if "CV_" in str(exc) else "")
+                raise SimulationError(f"integrator failed at t = {t:.6g} s in mode "
+                                      f"{self.plant.mode_dict(mf.mode)}{hint}: {why}") from None
+            if not np.all(np.isfinite(X)):
+                raise SimulationError(f"state became non-finite after t = {t:.6g} s in mode "
+                                      f"{self.plant.mode_dict(mf.mode)}: the parameters make the plant unstable")
+            self.check_bounded(X, X[:, -1], t, mf.mode)
+            tg = np.array([t + T]) if partial else t + T * frac
+            if mf.guards:
+                G = np.asarray(Gd)
+                bad = np.nonzero((G < -GUARD_EPS).any(axis=0))[0]
+            else:
+                bad = ()
+            if len(bad) == 0:
+                self.record(mf, tg, X)
+                return tg[-1], X[:, -1].copy(), None
+            k = int(bad[0])
+            t_left = t if k == 0 else tg[k - 1]
+            x_left = xs if k == 0 else X[:, k - 1]
+            g_left = self.guards(mf, x_left, t_left)[0]
+            best = None
+            for j in np.nonzero(G[:, k] < -GUARD_EPS)[0]:
+                te, xe = self.locate(mf, int(j), t_left, x_left, tg[k], g_left[j], G[j, k])
+                if best is None or te < best[0]:
+                    best = (te, xe, int(j))
+            self.record(mf, tg[:k], X[:, :k])
+            return best[0], best[1], best
+
+        return advance
 
     def switch(self, mode, mf, te, xe, j):
         """Guard j of ``mode`` fired at (te, xe): record the point on both sides of the switch, settle
@@ -353,64 +429,6 @@ class _Engine:
             f"more than max_events = {self.max_events} mode switches by t = {te:.6g} s; most frequent: "
             f"component {comp!r} {a} -> {b} ({cnt} times). Raise max_events if this is real, or check the "
             "parameters of that component")
-
-    def run(self, xs, mode, t_end, dt):
-        """Main loop on CVODES chunks (guards sampled on the output grid)."""
-        plant = self.plant
-        n = plant.n_grid
-        t = 0.0
-        mode, xs, switched = self.settle(mode, xs, t)
-        self.log(switched, t)
-        self.record(plant.functions(mode), np.array([t]), xs[:, None])
-        frac = np.linspace(0.0, 1.0, n + 1)[1:]
-        T_long = n * dt
-        while t < t_end * (1 - 1e-12):
-            mf = plant.functions(mode)
-            # chunks start on the global grid k*dt (after an event: one step to the next grid point)
-            t_grid = math.ceil(t / dt * (1 - 1e-14)) * dt
-            partial = t_grid - t > 1e-12 * max(1.0, t)
-            T = min(t_grid - t, t_end - t) if partial else min(T_long, t_end - t)
-            try:
-                if partial:
-                    X = np.asarray(mf.integ_one(x0=xs, p=np.concatenate([[t, T], self.P]))["xf"])
-                    Gd = self.guards(mf, X[:, 0], t + T)[0][:, None]
-                else:
-                    Xd, Gd = mf.step(xs, [t, T], self.P)
-                    X = np.asarray(Xd)
-            except RuntimeError as exc:
-                lines = str(exc).splitlines()
-                why = next((ln.strip() for ln in lines if "CVode returned" in ln or "CV_" in ln), lines[-1])
-                hint = (" (CVODES gave up: the loop is probably unstable with these gains or parameters)"
-                        if "CV_" in str(exc) else "")
-                raise SimulationError(f"integrator failed at t = {t:.6g} s in mode {plant.mode_dict(mode)}{hint}: "
-                                      f"{why}") from None
-            if not np.all(np.isfinite(X)):
-                raise SimulationError(f"state became non-finite after t = {t:.6g} s in mode "
-                                      f"{plant.mode_dict(mode)}: the parameters make the plant unstable")
-            self.check_bounded(X, X[:, -1], t, mode)
-            tg = np.array([t + T]) if partial else t + T * frac
-            if mf.guards:
-                G = np.asarray(Gd)
-                bad = np.nonzero((G < -GUARD_EPS).any(axis=0))[0]
-            else:
-                bad = ()
-            if len(bad) == 0:
-                self.record(mf, tg, X)
-                xs, t = X[:, -1].copy(), tg[-1]
-                continue
-            k = int(bad[0])
-            t_left = t if k == 0 else tg[k - 1]
-            x_left = xs if k == 0 else X[:, k - 1]
-            g_left = self.guards(mf, x_left, t_left)[0]
-            best = None
-            for j in np.nonzero(G[:, k] < -GUARD_EPS)[0]:
-                te, xe = self.locate(mf, int(j), t_left, x_left, tg[k], g_left[j], G[j, k])
-                if best is None or te < best[0]:
-                    best = (te, xe, int(j))
-            te, xe, j = best
-            self.record(mf, tg[:k], X[:, :k])
-            mode, xs, t = self.switch(mode, mf, te, xe, j)
-        return mode
 
 
 def simulate(params: Parameters | None = None, model: str = "macro", t_end: float = 40.0, *,
@@ -532,9 +550,10 @@ def simulate(params: Parameters | None = None, model: str = "macro", t_end: floa
         method = "ros3p" if plant.functions(mode0).stepper is not None else "cvodes"
     if method == "ros3p":
         hmax = 100 * dt if max_step is None else float(max_step)
-        eng.run_stepped(xs0, mode0, float(t_end), float(dt), rtol, atol, hmax)
+        advance = eng.ros3p(float(t_end), float(dt), rtol, atol, hmax)
     else:
-        eng.run(xs0, mode0, float(t_end), float(dt))
+        advance = eng.cvodes(float(t_end), float(dt))
+    eng.run(xs0, mode0, float(t_end), advance)
     T, X, code, Y = eng.outputs()
     wall = time.perf_counter() - wall0
     build = plant.build_seconds - build0

@@ -6,7 +6,9 @@ catalogue name (:data:`kilnctl.measure.effects.CATALOGUE`: ``second_motor``,
 ``torque_friction_law`` ...) or component name (:data:`kilnctl.model.REGISTRY`).
 It gives the component tuple the plant is assembled from
 (:meth:`Structure.components`) and the parameter options the effects set
-(:meth:`Structure.apply`: ``friction_law = 'torque'`` ...).  It holds no
+(:meth:`Structure.apply`: ``friction_law = 'torque'`` ...); iterating over
+it gives the components too, so it stands where a component tuple stood
+(``"mesh" in structure``, ``tuple(structure)``).  It holds no
 parameter values: the calibrated values of a diagnosis travel in a
 :class:`~kilnctl.params.Parameters` beside it
 (:func:`kilnctl.design.learned.learned_structure`).
@@ -85,6 +87,13 @@ class Structure:
         """
         extra, _ = effect_components(self.effects, Parameters(), self.model)
         return component_names(self.model, extra, self.remove)
+
+    def __iter__(self):
+        """Iterate over the components, so a Structure stands where a component tuple stood."""
+        return iter(self.components())
+
+    def __contains__(self, name) -> bool:
+        return name in self.components()
 
     @property
     def options(self) -> dict[str, str]:

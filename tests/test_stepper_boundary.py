@@ -49,3 +49,18 @@ def test_wrong_lengths_are_refused_before_any_c_runs():
         st.run(P[:-1], 0.0, 1.0, xs0, 1e-3, 1e-7, 1e-8, 0.1, 0.0, 1e-9)
     with pytest.raises(SimulationError, match="x has"):
         st.guard(P, xs0[:-1], 0.0)
+
+
+def test_the_first_step_comes_from_python():
+    # rosenbrock.c keeps no first step of its own (it was a hidden 1e-4 there): a step <= 0 is refused as a
+    # bad argument (status -7), and the one definition, stepper.FIRST_STEP, integrates. Truth for the result:
+    # the exact decay x(t) = x0 exp(-t) of the toy plant dx/dt = -x (P = 1), its guard x + 1 never crossing
+    st = stepper_mod.build_stepper(*_toy())
+    if st is None:
+        pytest.skip("no C compiler: the compiled stepper is not used")
+    P, x0 = np.array([1.0]), np.array([1.0, 2.0])
+    r = st.run(P, 0.0, 1.0, x0, 1e-2, 1e-9, 1e-10, 0.1, 0.0, 1e-9)
+    assert stepper_mod.STATUS[r["status"]] == "bad arguments to the compiled stepper"
+    r = st.run(P, 0.0, 1.0, x0, 1e-2, 1e-9, 1e-10, 0.1, stepper_mod.FIRST_STEP, 1e-9)
+    assert r["status"] == 0
+    np.testing.assert_allclose(r["x_ev"], x0 * np.exp(-1.0), rtol=1e-6)  # ROS3P global error at rtol 1e-9: 2e-7

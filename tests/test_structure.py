@@ -38,6 +38,9 @@ def test_components_effects_and_options():
     assert t.effects == ("second_motor", "speed_sensor_lag") and t == Structure("macro", ["second_motor",
                                                                                            "speed_sensor_lag"])
     assert hash(t) == hash(Structure("macro", ("second_motor", "speed_sensor_lag")))
+    # it stands where a component tuple stood (learned_structure returned a tuple before)
+    assert tuple(t) == t.components() and list(t) == list(t.components()) and "second_motor" in t
+    assert "mesh" in PRESETS["micro"] and "mesh" not in PRESETS["macro"]
 
 
 @pytest.mark.parametrize("bad, match", [

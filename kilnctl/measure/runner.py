@@ -17,14 +17,13 @@ import numpy as np
 
 from ..errors import KilnctlError
 from ..params import Parameters
+from ..simulate import DEFAULT_DT as _DT  # default simulation output step per model [s], defined there once
 from .io import Experiment, Measurement
 
 __all__ = ["CHANNELS", "ModelRun", "run_model", "kiln_angle"]
 
 #: measured column -> model output, unit
 CHANNELS: dict[str, tuple[str, str]] = {"current_A": ("i_a", "A"), "speed_rpm": ("speed_rpm", "rpm")}
-#: default simulation output step per model [s] (the simulator's own defaults)
-_DT = {"macro": 5e-3, "micro": 1e-3}
 
 
 @dataclass

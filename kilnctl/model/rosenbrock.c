@@ -38,7 +38,7 @@ int kp_work(cint* sz_arg, cint* sz_res, cint* sz_iw, cint* sz_w);
 #define NMAX 64
 #define GMAX 64
 /* interface version of the kiln_* entry points: kilnctl.model.stepper checks it before any call */
-#define KILN_ABI 3
+#define KILN_ABI 4
 cint kf_n_in(void); cint kj_n_in(void); cint kt_n_in(void); cint kg_n_in(void);
 cint ko_n_in(void); cint kd_n_in(void); cint kp_n_in(void);
 cint kd_n_out(void);
@@ -139,7 +139,7 @@ int kiln_run(int n, int ng, const double* P, double t0, double t_end, const doub
              double* h_last, double runaway, double guard_eps) {
     n_out[0] = 0; n_steps[0] = 0; h_last[0] = 0.0;
     if (n > NMAX || ng > GMAX || n < 1 || ng < 0) return -5;
-    if (max_out < 2 || !(dt_out > 0) || !(hmax > 0)) return -7;
+    if (max_out < 2 || !(dt_out > 0) || !(hmax > 0) || !(h0 > 0)) return -7;
     /* a step never spans more output samples than half the buffer, so a restart always makes progress */
     if (hmax > 0.5 * max_out * dt_out) hmax = 0.5 * max_out * dt_out;
     ctx_t* c = (ctx_t*)malloc(sizeof(ctx_t));
@@ -150,7 +150,7 @@ int kiln_run(int n, int ng, const double* P, double t0, double t_end, const doub
     double g0[GMAX], g1[GMAX], gt[GMAX], gi[GMAX];
     int piv[NMAX];
     int status = 0, steps = 0, nout = 0;
-    double t = t0, h = h0 > 0 ? h0 : fmin(1e-4, hmax);
+    double t = t0, h = h0;  /* the first step comes from Python (kilnctl.model.stepper.FIRST_STEP); capped below */
     memcpy(x, x0, n * sizeof(double));
     if (call3(kf, c, x, t, f0) || call3(kg, c, x, t, g0)) { status = -2; goto done; }
     /* samples on the global grid k*dt_out, after t0 */
@@ -208,7 +208,9 @@ int kiln_run(int n, int ng, const double* P, double t0, double t_end, const doub
            steps from (t, x).  A crossing seen only on the interpolant must be confirmed by a real step;
            a false alarm (interpolant and real step differ by the local error near a tangency, or when
            the crossing lies within the error of a grid point) does NOT end the scan: the later check
-           points and t1 are still examined, so a real crossing later in the step is never skipped. */
+           points and t1 are still examined, so a real crossing later in the step is never skipped.
+           The CVODES engine locates crossings with its own Illinois iteration in Python
+           (kilnctl/simulate.py, _Engine.locate): kept apart on purpose, so the engines check each other. */
         int jbest = -1; double tbest = t1;
         if (ng > 0) {
             double kk = floor(t / dt_out * (1 + 1e-14)) + 1.0;

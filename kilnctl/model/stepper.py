@@ -21,7 +21,7 @@ import numpy as np
 from ..errors import SimulationError
 from .compiled import compile_sources, generate_c
 
-__all__ = ["Stepper", "build_stepper", "STATUS", "GUARD_EPS", "NMAX"]
+__all__ = ["Stepper", "build_stepper", "STATUS", "GUARD_EPS", "FIRST_STEP", "RUNAWAY", "NMAX"]
 
 #: meaning of kiln_run's return codes
 STATUS = {0: "reached t_end", 1: "event", 2: "output buffer full", -1: "singular iteration matrix",
@@ -33,8 +33,13 @@ STATUS = {0: "reached t_end", 1: "event", 2: "output buffer full", -1: "singular
 #: starts on its boundary does not fire on round-off or on integration error below the default
 #: absolute tolerance; the one definition, used by both engines and passed to the C stepper
 GUARD_EPS = 1e-7
+#: first step [s] of the compiled stepper at a start and after every mode switch (then capped at the
+#: largest step); the one definition, passed to the C stepper like GUARD_EPS
+FIRST_STEP = 1e-4
+#: a scaled state beyond this is a runaway (the loop is unstable), reported as an error; passed to the C stepper
+RUNAWAY = 1e6
 #: interface version of rosenbrock.c's entry points (KILN_ABI there); a library that reports another is not used
-ABI = 3
+ABI = 4
 #: most states and most guards the C stepper handles (its fixed arrays, ``NMAX``/``GMAX`` in rosenbrock.c)
 NMAX = 64
 
@@ -114,7 +119,7 @@ class Stepper:
         return out
 
     def run(self, P, t0, t_end, x0, dt_out, rtol, atol, hmax, h0, event_tol, max_out=4096, max_steps=500000,
-            runaway=1e6, guard_eps=GUARD_EPS):
+            runaway=RUNAWAY, guard_eps=GUARD_EPS):
         """Integrate from (t0, x0) to t_end or the first guard crossing.
 
         Parameters
@@ -130,7 +135,8 @@ class Stepper:
         rtol, atol : float
             Integration tolerances (atol on scaled states).
         hmax, h0 : float
-            Largest step and first step [s] (h0 <= 0: a default).
+            Largest step and first step [s], both > 0 (:data:`FIRST_STEP` at a
+            start or after a switch; the stepper caps it at ``hmax``).
         event_tol : float
             Width [s] to which a guard crossing is located.
         max_out : int
