@@ -35,7 +35,8 @@ __all__ = ["Study", "OUTPUTS", "SIM_OPTIONS"]
 SIM_OPTIONS = ("dt", "rtol", "atol", "event_tol", "max_events", "n_grid", "method", "max_step", "max_samples")
 
 #: source files whose content decides a simulation's result; their hash is part of every cache key
-_CODE_PARTS = ("params.py", "simulate.py", "response.py", "linear.py", "model", "design")
+_CODE_PARTS = ("params.py", "gains.py", "structure.py", "measure/effects.py", "simulate.py", "response.py", "linear.py",
+               "model", "design")
 
 
 @lru_cache(maxsize=1)
