@@ -142,3 +142,19 @@ def test_every_catalogue_effect_smooths(name):
     rh = simulate(params, components=hybrid, t_end=8.0)
     assert np.all(np.isfinite(rs["i_a"]))
     assert rs["speed_rpm"][-1] == pytest.approx(rh["speed_rpm"][-1], rel=0.02)
+
+
+def test_optimizer_refuses_an_effect_with_modes_and_no_twin_and_takes_one_with_a_twin():
+    # truth: the declarations: current_limit has modes and no smooth_twin, motor_coulomb_friction names its twin
+    from kilnctl.errors import ModelError
+    from kilnctl.optimize.model import check_effects, hybrid_components, smooth_components
+    from kilnctl.optimize.problem import Profile
+
+    with pytest.raises(ModelError, match="'current_limit'.*modes and no smooth twin"):
+        check_effects(("current_limit",))
+    prof = Profile.parse("constant")
+    for name, comp in REGISTRY.items():
+        if comp.modes and comp.smooth_twin and name not in component_names("micro"):
+            assert check_effects((name,)) == (name,)
+            assert comp.smooth_twin in smooth_components(prof, (name,)) and name not in smooth_components(prof, (name,))
+            assert name in hybrid_components(prof, (name,))
