@@ -489,7 +489,7 @@ def plot_ranking(d, fig=None):
     a0.axvline(0, color="0.3", lw=0.6)
     a0.set_yticks(y, names, fontsize=8)
     a0.invert_yaxis()
-    a0.set_xlabel("BIC improvement -dBIC on the fitting part, coloured noise modelled [-] (log beyond 10)")
+    a0.set_xlabel("-dBIC on the fitted part, coloured noise modelled [-]\n(log scale beyond 10)")
     a0.set_title("evidence in the fitted part (more is better)", fontsize=9)
     a0.legend(handles=[Patch(color=COLORS["supported"], label="supported (both tests)"),
                        Patch(color=COLORS["rejected"], label="not supported"),
@@ -505,7 +505,7 @@ def plot_ranking(d, fig=None):
     a1.axvline(0, color="0.3", lw=0.6)
     a1.set_yticks(y, [""] * len(y))
     a1.invert_yaxis()
-    a1.set_xlabel("held-out gain in standard errors [-]: error reduction on samples not fitted")
+    a1.set_xlabel("held-out gain [standard errors]:\nerror reduction on samples not fitted")
     a1.set_title("prediction of unseen samples (more is better)", fontsize=9)
     a1.legend(fontsize=7.5, loc="lower right")
     chans = list(d.baseline_)
