@@ -263,6 +263,27 @@ def _interrupts():
         state.restore_stderr()
 
 
+def _caused_by_interrupt(exc: BaseException) -> bool:
+    """True if a KeyboardInterrupt is in the cause or context chain of ``exc``."""
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, KeyboardInterrupt):
+            return True
+        seen.add(id(exc))
+        exc = exc.__cause__ or exc.__context__
+    return False
+
+
+def _interrupted(command: str, state, note: str) -> int:
+    """Say ``<command>: interrupted`` on one line and give the exit code of a Ctrl-C."""
+    if state is not None:
+        state.done.set()
+    out = sys.stderr if state is None else state.stderr
+    print(f"{command}: interrupted" + (f"; {note}" if note else ""), file=out, flush=True)
+    _mark_interrupt_handled()
+    return EXIT_INTERRUPTED
+
+
 def main(argv=None) -> int:
     """Run the ``kilnctl`` command line.
 
@@ -287,17 +308,18 @@ def main(argv=None) -> int:
             if state is not None:
                 state.command = command
             return int(args.func(args) or 0)
-        except KilnctlError as exc:
-            print(f"{command}: error: {exc}", file=sys.stderr)
-            return 2
         except KeyboardInterrupt as exc:
-            if state is not None:
-                state.done.set()
-            note = str(exc)
-            out = sys.stderr if state is None else state.stderr
-            print(f"{command}: interrupted" + (f"; {note}" if note else ""), file=out, flush=True)
-            _mark_interrupt_handled()
-            return EXIT_INTERRUPTED
+            return _interrupted(command, state, str(exc))
+        except Exception as exc:
+            # a Ctrl-C that lands in code which wraps it (an import creating a class: Python 3.11 turns an
+            # exception in __set_name__ into a RuntimeError; a library turning it into its own error) is
+            # still a Ctrl-C: exit 130 with the one line, not a traceback or "error"
+            if _caused_by_interrupt(exc):
+                return _interrupted(command, state, "")
+            if isinstance(exc, KilnctlError):
+                print(f"{command}: error: {exc}", file=sys.stderr)
+                return 2
+            raise
         except BrokenPipeError:  # output piped into `head` and closed early
             sys.stderr.close()
             return 0
