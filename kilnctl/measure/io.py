@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import csv
 import math
+import re
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -428,7 +429,7 @@ def _interpret(table, params, columns, *, log=False) -> Measurement:
                                 " give the full name with its unit")
             j = hits[0]
             hunit = parsed[j][1]
-            if wunit and hunit and wunit.lower() != hunit.lower():
+            if wunit and hunit and wunit.lower() != hunit.lower() and _kiln_side(wunit)[0].lower() != hunit.lower():
                 raise DataError(f"{head}: column {names[j]!r} says [{hunit}], but the column "
                                 f"mapping says {ch}={want}; remove one of the two units")
             found[ch] = (j, wunit or hunit)
@@ -439,7 +440,7 @@ def _interpret(table, params, columns, *, log=False) -> Measurement:
                 found[ch] = (hits[0], parsed[hits[0]][1])
             elif ch in REQUIRED:
                 raise DataError(f"{head}: missing column {ch!r} [{REQUIRED[ch]}]; "
-                                f"the header has {', '.join(names)}; {_mapping_hint(ch, parsed, columns, found)}")
+                                f"the header has {', '.join(names)}; {_mapping_hint(ch, parsed, columns, found, table)}")
     by_col: dict[int, str] = {}
     for ch, (j, _) in found.items():
         if j in by_col:
@@ -469,9 +470,15 @@ def _interpret(table, params, columns, *, log=False) -> Measurement:
         else:
             arrays[ch] = _numbers(table, j, labels[ch], required=True)
         if not (ch == "time_s" and tnote):
+            unit, kiln_side = _kiln_side(unit) if ch in ("speed_rpm", "speed_ref_rpm") else (unit, False)
             arrays[ch], note = convert(arrays[ch], unit, ch, f"{src}: column {labels[ch]}")
             if note:
                 notes.append(note)
+            if kiln_side:
+                n_gear = (Parameters() if params is None else params).n
+                arrays[ch] = arrays[ch] * n_gear
+                notes.append(f"{ch} is the kiln-side speed: multiplied by the setup's reduction n = {n_gear:g} to "
+                             "the motor speed")
     used_cols = {j for j, _ in found.values()}
     kept, dropped = [], []
     for j, nm in enumerate(names):
@@ -491,31 +498,179 @@ def _interpret(table, params, columns, *, log=False) -> Measurement:
             kept.append(nm)
     if kept:
         notes.append(f"extra columns kept but not compared: {', '.join(kept)}")
+    notes.extend(_speed_column_notes(arrays, parsed, names, found, kept, columns))
     if dropped:
         notes.append(f"columns ignored: {', '.join(dropped)}")
     return _checked(arrays, rows, src, params, tuple(notes), row_word=table.row_word, labels=labels, log=log,
                     time_name=parsed[tj][0])
 
 
-def _mapping_hint(missing, parsed, columns, found) -> str:
-    """Suggest a --columns mapping for the missing channels from the units written in the header."""
-    from .tables import QUANTITY
+#: a unit written at the end of a column's name, ``motor_current_A``, ``t_ms``, ``n_rad_s``
+_NAME_UNIT = re.compile(r"(?:^|[_\s.-])(ka|ma|a|rpm|rad_s|rads|ms|us|s|sec)$", re.IGNORECASE)
+_NAME_UNIT_AS = {"rad_s": "rad/s", "rads": "rad/s"}
+#: words in a column's name that point to a channel: substrings (long words) and whole tokens (short ones)
+_NAME_WORDS = {
+    "time": (("time", "zeit", "stamp", "date"), ("t", "ts", "tm")),
+    "current": (("current", "strom", "amp"), ("i", "ia", "iarm", "i_a", "i_arm", "curr", "cur")),
+    "speed": (("speed", "drehzahl", "omega", "velocity", "rpm"), ("n", "nm", "w", "v", "spd", "n_mot", "nmot")),
+}
+#: words that mark a speed column as a reference or as the kiln-side speed (not the measured motor speed)
+_REF_WORDS = ("ref", "soll", "set", "sp", "cmd", "demand", "target")
+_KILN_WORDS = ("kiln", "ofen", "drum", "shell")
+
+
+def _name_unit(name: str) -> str | None:
+    """A unit written at the end of a column's name (``motor_current_A`` -> ``A``), if it is one kilnctl knows."""
+    m = _NAME_UNIT.search(name.strip())
+    if not m:
+        return None
+    u = _NAME_UNIT_AS.get(m.group(1).lower(), m.group(1))
+    return u if _unit_quantity(u) else None
+
+
+def _tokens(name: str) -> list[str]:
+    spaced = re.sub(r"([a-z0-9])([A-Z])", r"\1 \2", name)  # camelCase: nRef -> n Ref
+    return [w for w in re.split(r"[^a-z0-9]+", spaced.lower()) if w]
+
+
+def _has_word(name: str, words) -> bool:
+    low, toks = name.lower(), _tokens(name)
+    return any(w in toks or (len(w) > 3 and w in low) for w in words)
+
+
+def _looks_like_stamp(cell) -> bool:
+    if isinstance(cell, np.datetime64):
+        return True
+    if not isinstance(cell, str):
+        return False
+    import datetime as _dt
+
+    try:
+        _dt.datetime.fromisoformat(cell.strip())
+        return True
+    except ValueError:
+        return False
+
+
+def _guess_mapping(table, parsed, columns, found) -> dict[str, str]:
+    """Guess kilnctl's channels among a header's columns from units, names and cells (for a hint only).
+
+    Returns channel -> the ``--columns`` value (the column's base name, with the unit when only the name says it).
+    """
+    from .tables import QUANTITY as QUANTITY_OF
+    from .tables import UNITS as UNITS_OF
 
     taken = {j for j, _ in found.values()}
+    first = [next((c for c in col if not _cell_missing(c)), None) if len(col) else None for col in table.columns]
     guess = {}
-    for ch in REQUIRED:
+    for ch in list(REQUIRED) + list(OPTIONAL):
         if ch in found or ch in columns:
             continue
+        q = QUANTITY_OF[ch]
+        best, best_score = None, 0
         for j, (base, unit) in enumerate(parsed):
-            if j not in taken and unit and _unit_quantity(unit) == QUANTITY[ch]:
-                guess[ch] = base
-                taken.add(j)
-                break
+            if j in taken:
+                continue
+            nunit = None if unit else _name_unit(base)
+            uq = _unit_quantity(unit or nunit or "")
+            if uq is not None and uq != q:
+                continue
+            score = 2 * (uq == q)
+            if q == "time" and j < len(first) and _looks_like_stamp(first[j]):
+                score += 3
+            subs, toks = _NAME_WORDS[q]
+            if _has_word(base, subs) or any(t in _tokens(base) for t in toks) or base.lower() in toks:
+                score += 1
+            if q == "speed":
+                is_ref, is_kiln = _has_word(base, _REF_WORDS), _has_word(base, _KILN_WORDS)
+                if is_kiln or (is_ref != (ch == "speed_ref_rpm")):
+                    continue
+            if score > best_score:
+                best, best_score = j, score
+        if best is None:
+            continue
+        base, unit = parsed[best]
+        nunit = None if unit else _name_unit(base)
+        factor = UNITS_OF[QUANTITY_OF[ch]].get((nunit or "").lower(), 1.0)
+        guess[ch] = base + (f" [{nunit}]" if nunit and factor != 1.0 else "")
+        taken.add(best)
+    return guess
+
+
+def _mapping_hint(missing, parsed, columns, found, table=None) -> str:
+    """Suggest a ``--columns`` mapping for the missing channels from the header's units and names."""
     where = " (or columns in the setup's [measurement] section)"
+    guess = _guess_mapping(table, parsed, columns, found) if table is not None else {}
     if missing in guess:
-        return "map yours with --columns " + ",".join(f"{k}={v}" for k, v in guess.items()) + where
+        text = ",".join(f"{k}={v}" for k, v in guess.items())
+        if any(c in text for c in " []()"):
+            text = f"'{text}'"
+        return f"map yours with --columns {text}{where}; guessed from the header's names and units: check it"
     hint = close_matches_hint(missing, [b for b, _ in parsed])
     return f"{hint} (map a column of another name with --columns {missing}=NAME{where})"
+
+
+#: words that mark a speed unit as measured on the kiln side of the gears: ``[kiln rpm]``, ``[rpm @ kiln]``
+_KILN_SIDE = re.compile(r"^\s*(?:kiln\s+|@\s*kiln\s+)?(?P<u>.*?)(?:\s*(?:@|at)?\s*kiln)?\s*$", re.IGNORECASE)
+
+
+def _kiln_side(unit: str | None) -> tuple[str | None, bool]:
+    """Split a speed unit into the unit proper and whether it is marked as the kiln-side speed.
+
+    ``kiln rpm``, ``rpm kiln``, ``rpm @ kiln``, ``rad/s at kiln`` -> (``rpm``/``rad/s``, True); ``rpm`` -> (``rpm``,
+    False); ``kiln`` alone means rpm at the kiln.
+    """
+    if unit is None or "kiln" not in unit.lower():
+        return unit, False
+    if unit.strip().lower() == "kiln":
+        return "rpm", True
+    m = _KILN_SIDE.match(unit)
+    u = m.group("u").strip() if m else unit
+    return (u or "rpm"), True
+
+
+def _column_base(labels, channel) -> str:
+    """The record's own column name (unit removed) behind a channel, from the labels used in messages."""
+    from .tables import split_unit
+
+    m = re.match(r"^'(.*)'(?: \(read as \w+\))?$", (labels or {}).get(channel, ""))
+    return split_unit(m.group(1))[0] if m else channel
+
+
+def _speed_column_notes(arrays, parsed, names, found, kept, columns) -> list[str]:
+    """Notes on speed columns a user easily mixes up: the reference left unmapped, a reference or the kiln-side
+    speed read as the measured motor speed (a reference is a noise-free straight ramp, a measured speed is not)."""
+    out = []
+    j_speed = found["speed_rpm"][0]
+    base = parsed[j_speed][0]
+    t, v = arrays["time_s"], arrays["speed_rpm"]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        slope = np.diff(v) / np.diff(t)
+    moving = np.abs(slope) > 1e-9
+    if v.size > 20 and moving.sum() > 10:
+        change = np.abs(np.diff(slope[moving]))
+        top = float(np.max(np.abs(v))) or 1.0
+        dt = float(np.median(np.diff(t)))
+        if np.isfinite(change).all() and np.median(change) * dt < 1e-6 * top:
+            out.append(f"speed_rpm ({names[j_speed]!r}) rises as a noise-free straight ramp: it looks like the speed "
+                       "reference, not the measured motor speed; map the measured speed with --columns "
+                       "speed_rpm=NAME")
+    if _has_word(base, _REF_WORDS) and not any("noise-free" in n for n in out):
+        out.append(f"speed_rpm is read from {names[j_speed]!r}, whose name says reference: kilnctl compares the "
+                   "model with the measured motor speed; map that with --columns speed_rpm=NAME")
+    if "speed_ref_rpm" not in found and "speed_ref_rpm" not in columns:
+        refs = [nm for nm in kept if _has_word(split_unit_base(nm), _REF_WORDS)]
+        if refs:
+            out.append(f"{refs[0]!r} looks like the speed reference but is not used: the ramp's start is taken from "
+                       f"the measured speed's rise; map it with --columns speed_ref_rpm={split_unit_base(refs[0])} to "
+                       "take the ramp from it")
+    return out
+
+
+def split_unit_base(name: str) -> str:
+    from .tables import split_unit
+
+    return split_unit(name)[0]
 
 
 def _unit_quantity(unit: str):
@@ -746,7 +901,8 @@ def _check_units(arrays, lines, source, params, row_word, labels=None, log=False
             raise DataError(
                 f"{at}: largest value {top:.4g} looks like the kiln speed, "
                 f"not the motor speed (the setup's {w_ref:g} rpm motor speed is {kiln:.3g} rpm at the kiln, "
-                f"reduction n = {params.n:g}); multiply by n, or map the motor speed if the file has it")
+                f"reduction n = {params.n:g}); map the motor speed if the file has it, or mark this one as measured at "
+                f"the kiln (it is then multiplied by n): --columns '{name}={_column_base(labels, name)} [kiln rpm]'")
         if not log and name == "speed_rpm" and np.median(a[a.size // 2:]) < 0 < w_ref:
             raise DataError(
                 f"{source}: column 'speed_rpm' is negative over the second half of the record (median "

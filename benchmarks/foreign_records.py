@@ -1,0 +1,364 @@
+"""Foreign start-up records (red team): a plant written apart from kilnctl, logged as a plant historian would.
+
+The plant is written from the paper (van Dyk & Pretorius 1994, eqs. 1-21, Table 1)
+and /work/shared/paper/NOTES.md only, with numpy; it imports nothing of
+kilnctl's model nor ``benchmarks/baselines.py``.  Its own formulation:
+
+* DC motor, armature ``L_a di/dt = e_a + k_D de_f/dt - R_a i - k_b w_m`` with the
+  derivative realised as a direct term (NOTES, eq. 21), PI voltage clamped to
+  +-V_max with the integrator frozen while clamped; reference ramp ``ramp_rate``
+  [rpm/s] to ``omega_ref`` [rpm].
+* Kiln and burden: the torque-consistent stick-slip law written as a state
+  machine (stuck: burden turns with the shell while the holding torque
+  ``J_v a_k + m g L sin psi`` stays within ``mu_s m g R cos psi``; sliding:
+  kinetic torque ``mu_c m g R cos psi`` against the relative speed; re-stick
+  when the relative speed changes sign and the static limit holds), fixed-step
+  RK4 at 0.5 ms with mode changes checked after every step.  Bearing friction
+  eq. 17 as a tanh-smoothed Coulomb torque.
+* Effects in forms of their own: ``J2`` (a second motor rigidly on the shaft),
+  ``shaft`` (a compliant shaft between motor and gearbox, stiffness and damping
+  on the motor axis), ``lag`` (a speed sensor of first order; its output is
+  both fed back and logged), ``coulomb`` (motor-side Coulomb friction, tanh),
+  ``isensor`` (current sensor with a gain error and an offset; not in
+  kilnctl's catalogue), ``load_step`` (a load torque switched on at the kiln
+  mid-record; not in the catalogue).
+
+Records are written in layouts kilnctl has not seen (column names, units,
+rates, ISO timestamps, missing samples, uneven time base), each with the
+setup TOML docs/measurements.md asks for and a ``.truth.json``.
+
+``python -m benchmarks.foreign_records --list`` lists them,
+``python -m benchmarks.foreign_records --write DIR [--only NAME,...]`` writes them.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import zlib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["PlantSpec", "RECORDS", "simulate_plant", "write_record", "main"]
+
+# Table 1 of the paper (and NOTES.md readings), SI units
+TABLE1 = dict(R_a=0.00961, L_a=0.00057, k_i=4.6, k_b=4.6, J_m=21.5, B_m=0.005, J_o=6.978e6, J_v=1.678e6,
+              m_v=580e3, L=1.353, R=2.17, mu_c=0.4, mu_s=0.51, n=1076.5, mu_brg=0.001, P=16.512e6,
+              l_brg=0.7155, k_brg=0.5475, g=9.81)
+K_FB = 60.0 / (2.0 * math.pi)   # rpm per rad/s (eq. 21's K)
+
+
+@dataclass
+class PlantSpec:
+    """One foreign start-up: plant values, effects, controller and how it is logged."""
+
+    name: str
+    t_end: float                       # s after the trigger
+    fs: float                          # logger rate [Hz]
+    gains: tuple = (2.0, 5.0, 0.01)    # k_p [V/rpm], k_I [V/(rpm s)], k_D [V s/rpm]
+    ramp_rate: float = 74.0            # rpm/s
+    omega_ref: float = 500.0           # rpm
+    V_max: float = 500.0               # V
+    base: dict = field(default_factory=dict)      # Table 1 overrides (true plant)
+    setup_kiln: dict = field(default_factory=dict)  # what the user's setup states in [kiln]
+    effects: dict = field(default_factory=dict)   # effect name -> values (this plant's forms)
+    expected: tuple = ()               # catalogue effects a correct diagnosis selects
+    layout: str = "plain"              # how the record is written (see write_record)
+    pre_s: float = 1.5                 # logged seconds at rest before the ramp
+    noise: tuple = (6.0, 0.4)          # white noise std: current [A], speed [rpm]
+    ar1: tuple = (5.0, 0.2, 0.3)       # AR(1) noise: current [A], speed [rpm], time constant [s]
+    seed: int = 0
+    note: str = ""
+
+
+def _rhs(x, t, c, mode):
+    """Right-hand side of the plant. State x = [x_a, z, w_m, th_m, w_k, th_k, psi, w_b, w_s, ...]."""
+    x_a, z, w_m, th_m, w_k, th_k, psi, w_b, w_s = x
+    e_v = min(c["ramp_rate"] * t, c["omega_ref"]) if t > 0 else 0.0
+    ev_dot = c["ramp_rate"] if 0 < t < c["omega_ref"] / c["ramp_rate"] else 0.0
+    w_fb = w_s if c["tau_s"] > 0 else w_m
+    e_f = e_v - K_FB * w_fb
+    e_pi = c["k_p"] * e_f + c["k_I"] * z
+    clamped = abs(e_pi) > c["V_max"] and e_pi * e_f > 0
+    e_a = max(-c["V_max"], min(c["V_max"], e_pi))
+    i_a = x_a + c["k_D"] / c["L_a"] * e_f
+    # sensor
+    dw_s = (w_m - w_s) / c["tau_s"] if c["tau_s"] > 0 else 0.0
+    # burden and kiln torques (kiln axis)
+    mg = c["m_v"] * c["g"]
+    T_grav = mg * c["L"] * math.sin(psi)
+    T_brg = c["T_brg"] * math.tanh(w_k / 1e-3)
+    T_load = c["load"] if t >= c["load_t"] else 0.0
+    T_motor = c["k_i"] * i_a - c["B_m"] * w_m - c["T_cm"] * math.tanh(w_m / 0.05)
+    J_mot = c["J_m"] + c["J2"]
+    if c["k_s"] > 0:   # compliant shaft on the motor axis between motor and gearbox
+        T_sh = c["k_s"] * (th_m - c["n"] * th_k) + c["c_s"] * (w_m - c["n"] * w_k)
+        a_m = (T_motor - T_sh) / J_mot
+        T_drive_k = c["n"] * T_sh
+        J_k = c["J_o"]
+        J_drv = 0.0
+    else:
+        a_m = None
+        T_drive_k = c["n"] * T_motor
+        J_drv = J_mot * c["n"] ** 2
+        J_k = c["J_o"] + J_drv
+    if mode == 0:  # stuck: burden turns with the shell
+        a_k = (T_drive_k - T_grav - T_brg - T_load) / (J_k + c["J_v"])
+        a_b = a_k
+    else:
+        T_f = c["mu_c"] * mg * c["R"] * math.cos(psi) * (1.0 if mode > 0 else -1.0)
+        a_k = (T_drive_k - T_f - T_brg - T_load) / J_k
+        a_b = (T_f - T_grav) / c["J_v"]
+    if a_m is None:
+        a_m = c["n"] * a_k
+    # derivative of e_f for x_a: x_a = i_a - (k_D/L_a) e_f, L_a di/dt = e_a + k_D de_f - R i - k_b w
+    dx_a = (e_a - c["R_a"] * i_a - c["k_b"] * w_m) / c["L_a"]
+    dz = 0.0 if clamped else e_f
+    d = np.array([dx_a, dz, a_m, w_m, a_k, w_k, w_b if mode else w_k, a_b, dw_s])
+    return d, i_a, w_fb, e_v
+
+
+def _holding(x, t, c):
+    """Friction torque needed to keep the burden stuck, and the static limit [N m]."""
+    d, *_ = _rhs(x, t, c, 0)
+    mg = c["m_v"] * c["g"]
+    T_h = c["J_v"] * d[4] + mg * c["L"] * math.sin(x[6])
+    return T_h, c["mu_s"] * mg * c["R"] * math.cos(x[6])
+
+
+def simulate_plant(spec: PlantSpec, h: float = 5e-4):
+    """Simulate a foreign start-up.
+
+    Parameters
+    ----------
+    spec : PlantSpec
+        The plant, its effects and its controller.
+    h : float
+        Fixed RK4 step [s].
+
+    Returns
+    -------
+    dict
+        ``t`` [s] (0 = ramp start), true motor current ``i_a`` [A], motor speed ``w_m`` [rad/s],
+        sensor speed ``w_s`` [rad/s], reference ``e_v`` [rpm], number of mode changes ``events``.
+    """
+    p = dict(TABLE1)
+    p.update(spec.base)
+    eff = spec.effects
+    c = dict(p, k_p=spec.gains[0], k_I=spec.gains[1], k_D=spec.gains[2], ramp_rate=spec.ramp_rate,
+             omega_ref=spec.omega_ref, V_max=spec.V_max,
+             T_brg=2 * p["mu_brg"] * p["P"] / 2 * math.cos(math.pi / 6) * (p["l_brg"] + p["k_brg"]) / 2,
+             J2=eff.get("J2", {}).get("J", 0.0), k_s=eff.get("shaft", {}).get("k", 0.0),
+             c_s=eff.get("shaft", {}).get("c", 0.0), tau_s=eff.get("lag", {}).get("tau", 0.0),
+             T_cm=eff.get("coulomb", {}).get("T", 0.0), load=eff.get("load_step", {}).get("T", 0.0),
+             load_t=eff.get("load_step", {}).get("t", 1e9))
+    n_steps = int(round(spec.t_end / h))
+    x = np.zeros(9)
+    mode = 0
+    out_t = np.empty(n_steps + 1)
+    out = np.empty((n_steps + 1, 4))
+    events = 0
+    t = 0.0
+    for k in range(n_steps + 1):
+        d, i_a, w_fb, e_v = _rhs(x, t, c, mode)
+        out_t[k] = t
+        out[k] = (i_a, x[2], x[8] if c["tau_s"] > 0 else x[2], e_v)
+        if k == n_steps:
+            break
+        k1 = d
+        k2 = _rhs(x + 0.5 * h * k1, t + 0.5 * h, c, mode)[0]
+        k3 = _rhs(x + 0.5 * h * k2, t + 0.5 * h, c, mode)[0]
+        k4 = _rhs(x + h * k3, t + h, c, mode)[0]
+        x_new = x + h / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
+        t += h
+        if mode == 0:
+            x_new[7] = x_new[4]
+            T_h, T_s = _holding(x_new, t, c)
+            if abs(T_h) > T_s:      # breakaway: slides down against the shell's motion
+                mode = 1 if T_h > 0 else -1
+                events += 1
+        else:
+            rel_new = x_new[4] - x_new[7]
+            if (rel_new > 0) != (mode > 0):
+                x_new[7] = x_new[4]   # relative speed through zero: try to re-stick
+                T_h, T_s = _holding(x_new, t, c)
+                mode = 0 if abs(T_h) <= T_s else (1 if T_h > 0 else -1)
+                events += 1
+        x = x_new
+    return dict(t=out_t, i_a=out[:, 0], w_m=out[:, 1], w_s=out[:, 2], e_v=out[:, 3], events=events)
+
+
+def _noise(rng, n, dt, std, tau):
+    a = math.exp(-dt / tau)
+    e = rng.standard_normal(n) * std * math.sqrt(1 - a * a)
+    y = np.empty(n)
+    acc = rng.standard_normal() * std
+    for k in range(n):
+        acc = a * acc + e[k]
+        y[k] = acc
+    return y
+
+
+def logged(spec: PlantSpec):
+    """The record as the logger saw it: sample times [s] (0 = ramp start), current [A], speed [rpm], ref [rpm].
+
+    Parameters
+    ----------
+    spec : PlantSpec
+        The record's description.
+
+    Returns
+    -------
+    dict
+        ``t`` [s], ``i`` [A] (as the current sensor reads it), ``n`` [rpm] (as the speed sensor reads it),
+        ``ref`` [rpm], ``events`` (mode changes of the burden).
+    """
+    sim = simulate_plant(spec)
+    rng = np.random.default_rng(zlib.crc32(spec.name.encode()) + spec.seed)
+    dt = 1.0 / spec.fs
+    t = np.arange(-spec.pre_s, spec.t_end + 1e-9, dt)
+    if spec.layout in ("uneven", "iso_uneven"):
+        t = t + rng.uniform(-0.3, 0.3, t.size) * dt    # logger jitter
+        t = np.sort(t)
+    i = np.interp(t, sim["t"], sim["i_a"], left=0.0)
+    w = np.interp(t, sim["t"], sim["w_s"], left=0.0)
+    ref = np.interp(t, sim["t"], sim["e_v"], left=0.0)
+    if "isensor" in spec.effects:
+        s = spec.effects["isensor"]
+        i = s["gain"] * i + s["offset"]
+    n = w * K_FB
+    i = i + rng.standard_normal(t.size) * spec.noise[0] + _noise(rng, t.size, dt, spec.ar1[0], spec.ar1[2])
+    n = n + rng.standard_normal(t.size) * spec.noise[1] + _noise(rng, t.size, dt, spec.ar1[1], spec.ar1[2])
+    return dict(t=t, i=i, n=n, ref=ref, events=sim["events"])
+
+
+# layouts: how the historian writes the columns. Each: header names, converters, and the --columns map
+LAYOUTS = {
+    # kA and rad/s at the motor, seconds, 3 samples dropped (a logger hiccup)
+    "plain": dict(cols=("t [s]", "I_arm [kA]", "n_mot [rad/s]", "n_ref [rpm]"),
+                  conv=(1.0, 1e-3, 2 * math.pi / 60, 1.0), drop=3,
+                  columns="time_s=t [s],current_A=I_arm [kA],speed_rpm=n_mot [rad/s],speed_ref_rpm=n_ref [rpm]"),
+    # ISO timestamps, semicolon separated, 1/min, no reference column
+    "iso": dict(cols=("Timestamp", "Ankerstrom (A)", "Drehzahl (1/min)"), conv=(None, 1.0, 1.0), drop=0,
+                columns="time_s=Timestamp,current_A=Ankerstrom (A),speed_rpm=Drehzahl (1/min)", sep=";"),
+    # ms time base, tab separated, units only in the --columns map
+    "ms": dict(cols=("t_ms", "Ia", "nM", "nRef"), conv=(1e3, 1.0, 1.0, 1.0), drop=0,
+               columns="time_s=t_ms [ms],current_A=Ia [A],speed_rpm=nM [rpm],speed_ref_rpm=nRef [rpm]", sep="\t"),
+    # uneven time base (jittered logger), kiln speed logged in rpm at the kiln (the historian's tag)
+    "uneven": dict(cols=("time", "motor_current_A", "motor_speed_rpm", "kiln_speed_rpm", "quality"),
+                   conv=(1.0, 1.0, 1.0, None), drop=0,
+                   columns="time_s=time,current_A=motor_current_A,speed_rpm=motor_speed_rpm"),
+    # ISO timestamps with offset, uneven, kA
+    "iso_uneven": dict(cols=("ts", "I [kA]", "speed [rpm]"), conv=(None, 1e-3, 1.0), drop=2,
+                       columns="time_s=ts,current_A=I [kA],speed_rpm=speed [rpm]"),
+}
+
+
+def write_record(spec: PlantSpec, folder) -> dict:
+    """Write ``<name>.csv``, ``<name>.toml`` (the setup) and ``<name>.truth.json`` into ``folder``.
+
+    Parameters
+    ----------
+    spec : PlantSpec
+        The record.
+    folder : str or Path
+        Output folder (created).
+
+    Returns
+    -------
+    dict
+        The truth, with the ``--columns`` map to give and the paths written.
+    """
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    rec = logged(spec)
+    lay = LAYOUTS[spec.layout]
+    rng = np.random.default_rng(zlib.crc32(spec.name.encode()) + 7)
+    keep = np.ones(rec["t"].size, bool)
+    if lay["drop"]:
+        keep[rng.choice(np.arange(10, rec["t"].size - 10), lay["drop"], replace=False)] = False
+    sep = lay.get("sep", ",")
+    lines = [f"# foreign plant record {spec.name}, logger {spec.fs:g} Hz", sep.join(lay["cols"])]
+    t0_abs = np.datetime64("2026-03-01T06:15:00.000")
+    for k in np.flatnonzero(keep):
+        t = rec["t"][k] + spec.pre_s
+        cells = []
+        if lay["conv"][0] is None:
+            stamp = t0_abs + np.timedelta64(int(round(t * 1e6)), "us")
+            s = str(stamp)
+            cells.append(s + ("+02:00" if spec.layout == "iso_uneven" else ""))
+        else:
+            cells.append(f"{t * lay['conv'][0]:.6f}")
+        cells.append(f"{rec['i'][k] * lay['conv'][1]:.6g}")
+        cells.append(f"{rec['n'][k] * lay['conv'][2]:.6g}")
+        if len(lay["cols"]) > 3 and lay["cols"][3].startswith("n"):
+            cells.append(f"{rec['ref'][k] * lay['conv'][3]:.6g}")
+        if spec.layout == "uneven":
+            cells.append(f"{rec['n'][k] / TABLE1['n']:.6g}")
+            cells.append("good")
+        lines.append(sep.join(cells))
+    csv = folder / f"{spec.name}.csv"
+    csv.write_text("\n".join(lines) + "\n")
+    kiln = "\n".join(f"{k} = {v!r}" for k, v in spec.setup_kiln.items())
+    toml = (f"# setup of foreign record {spec.name}\n[controller]\ngains = \"given\"\n"
+            f"k_p = {spec.gains[0]}\nk_I = {spec.gains[1]}\nk_D = {spec.gains[2]}\n\n"
+            f"[drive]\nramp_rate = {spec.ramp_rate}\nomega_ref = {spec.omega_ref}\n\n[kiln]\n{kiln}\n")
+    (folder / f"{spec.name}.toml").write_text(toml)
+    truth = dict(name=spec.name, effects=spec.effects, expected=list(spec.expected), base=spec.base,
+                 fs=spec.fs, t_end=spec.t_end, layout=spec.layout, columns=lay["columns"], note=spec.note,
+                 events=rec["events"], i_max=float(np.max(rec["i"])), n_samples=int(keep.sum()))
+    (folder / f"{spec.name}.truth.json").write_text(json.dumps(truth, indent=1) + "\n")
+    return dict(truth, csv=str(csv), toml=str(folder / f"{spec.name}.toml"))
+
+
+_NUIS = dict(m_v=580e3 * 1.04, mu_c=0.4 * 0.97, mu_s=0.51 * 1.03, J_v=1.678e6 * 0.95)
+RECORDS = [
+    PlantSpec("f1_free_torque", 40.0, 100.0, base=_NUIS, setup_kiln=dict(friction_law="torque"),
+              layout="plain", note="no effect; the setup knows the torque law; kA and rad/s, 3 samples missing"),
+    PlantSpec("f2_j2_small", 30.0, 200.0, gains=(3.0, 4.0, 0.005), base=_NUIS,
+              setup_kiln=dict(friction_law="torque"), effects={"J2": {"J": 7.0}}, expected=("second_motor",),
+              layout="iso", note="second motor of 7 kg m^2 (below the usual 10-45); ISO timestamps; 200 Hz"),
+    PlantSpec("f3_shaft", 25.0, 500.0, base=_NUIS, setup_kiln=dict(friction_law="torque"),
+              effects={"shaft": {"k": 700.0, "c": 8.0}}, expected=("drivetrain_compliance",),
+              layout="ms", note="compliant shaft on the motor axis: k_po = 700 n^2 = 8.1e8, C_po = 9.3e6 N m s/rad "
+                                "(kiln axis); 500 Hz, time in ms"),
+    PlantSpec("f4_lag_paperlaw", 60.0, 20.0, base=_NUIS, effects={"lag": {"tau": 0.008}},
+              expected=("torque_friction_law", "speed_sensor_lag"), layout="uneven",
+              note="8 ms speed sensor (in the logged speed too), torque law the setup does not know; 20 Hz "
+                   "jittered time base, kiln speed column"),
+    PlantSpec("f5_isensor", 40.0, 50.0, base=_NUIS, setup_kiln=dict(friction_law="torque"),
+              effects={"isensor": {"gain": 1.05, "offset": 25.0}}, expected=(),
+              layout="iso_uneven", note="current sensor 5 % high with +25 A offset (not in the catalogue)"),
+    PlantSpec("f6_coulomb", 90.0, 10.0, base=_NUIS, setup_kiln=dict(friction_law="torque"),
+              effects={"coulomb": {"T": 60.0}}, expected=("motor_coulomb_friction",), layout="plain",
+              note="motor-side Coulomb friction 60 N m; 10 Hz, 90 s"),
+]
+
+
+def main(argv=None) -> int:
+    """Command line: list or write the foreign records."""
+    ap = argparse.ArgumentParser(prog="python -m benchmarks.foreign_records",
+                                 description="Write start-up records of an independently written kiln plant, "
+                                             "in plant-historian layouts, with setup TOML and truth JSON.")
+    ap.add_argument("--list", action="store_true", help="list the records and their truth")
+    ap.add_argument("--write", metavar="DIR", help="write the records into DIR")
+    ap.add_argument("--only", metavar="A,B", help="only these records")
+    a = ap.parse_args(argv)
+    specs = [s for s in RECORDS if not a.only or s.name in a.only.split(",")]
+    if a.list or not a.write:
+        for s in specs:
+            print(f"{s.name:18s} {s.t_end:5.0f} s {s.fs:5.0f} Hz  expected={list(s.expected)}  {s.note}")
+        return 0
+    for s in specs:
+        tr = write_record(s, a.write)
+        print(f"{s.name}: {tr['csv']} ({tr['n_samples']} samples, {tr['events']} burden mode changes, "
+              f"peak {tr['i_max']:.0f} A); --columns '{tr['columns']}'")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,136 @@
+"""Records laid out as a plant historian writes them (red team, issue 12): reading, hints and notes.
+
+Each test writes a small record whose true values are known because the test
+wrote them (motor speed, current, the column names), and checks what kilnctl
+reads or tells the user against them.
+"""
+
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from kilnctl import Parameters
+from kilnctl.errors import DataError
+from kilnctl.measure import read_record
+
+N_GEAR = 1076.5  # paper, Table 1: total reduction motor to kiln
+
+
+def _start_up(n=600, dt=0.05, seed=1):
+    """A plausible start-up: ramp at 74 rpm/s to 500 rpm from t = 1 s, current rising to about 800 A."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(n) * dt
+    ref = np.clip(74.0 * (t - 1.0), 0.0, 500.0)
+    speed = np.clip(74.0 * (t - 1.1), 0.0, 500.0) + rng.normal(0, 0.3, n)
+    current = 100.0 + 700.0 * np.clip((t - 1.0) / 10.0, 0, 1) + rng.normal(0, 4.0, n)
+    return t, current, speed, ref
+
+
+def _write(path, header, rows, sep=","):
+    path.write_text("# exported from the historian\n" + sep.join(header) + "\n"
+                    + "\n".join(sep.join(str(c) for c in r) for r in rows) + "\n")
+    return path
+
+
+@pytest.mark.parametrize("header, expected", [
+    # German names with units in parentheses and ISO timestamps: the time is recognised by its cells
+    (("Timestamp", "Ankerstrom (A)", "Drehzahl (1/min)"), "time_s=Timestamp,current_A=Ankerstrom,speed_rpm=Drehzahl"),
+    # units only at the end of the names; the kiln speed must not be taken for the motor speed
+    (("time", "motor_current_A", "kiln_speed_rpm", "motor_speed_rpm"),
+     "time_s=time,current_A=motor_current_A,speed_rpm=motor_speed_rpm"),
+    # ms in the name (converted, so the unit goes into the hint), camelCase reference column
+    (("t_ms", "Ia", "nM", "nRef"), "'time_s=t_ms [ms],current_A=Ia,speed_rpm=nM,speed_ref_rpm=nRef'"),
+])
+def test_missing_channels_hint_names_every_column(tmp_path, header, expected):
+    # truth: the test wrote the columns; the hint must give the whole mapping, not only the first channel
+    t, i, w, r = _start_up()
+    if header[0] == "Timestamp":
+        base = np.datetime64("2026-03-01T06:15:00.000")
+        rows = [(str(base + np.timedelta64(int(round(tt * 1e3)), "ms")), a, b) for tt, a, b in zip(t, i, w)]
+    elif header[0] == "time":
+        rows = list(zip(t, i, w / N_GEAR, w))
+    else:
+        rows = list(zip(t * 1e3, i, w, r))
+    p = _write(tmp_path / "rec.csv", header, rows)
+    with pytest.raises(DataError, match="missing column 'time_s'") as e:
+        read_record(p)
+    assert "--columns " + expected + " " in str(e.value)
+    # and the hint, followed, reads the record with the values the test wrote
+    cols = expected.strip("'")
+    m = read_record(p, columns=cols)
+    np.testing.assert_allclose(m.current, i, atol=1e-9)
+    np.testing.assert_allclose(m.speed, w, atol=1e-9)
+    np.testing.assert_allclose(m.t - m.t[0], t - t[0], atol=1e-9)
+
+
+def test_kiln_side_speed_is_multiplied_by_the_reduction(tmp_path):
+    # truth: the file holds the motor speed too; the kiln speed times n (Table 1) must give it back
+    t, i, w, _ = _start_up()
+    p = _write(tmp_path / "kiln.csv", ("t [s]", "I [A]", "n_kiln [rpm]", "n_motor [rpm]"),
+               [(a, b, f"{c / N_GEAR:.9g}", c) for a, b, c in zip(t, i, w)])
+    with pytest.raises(DataError, match=r"looks like the kiln speed.*--columns 'speed_rpm=n_kiln \[kiln rpm\]'"):
+        read_record(p, columns="time_s=t,current_A=I,speed_rpm=n_kiln")
+    m = read_record(p, Parameters(), columns="time_s=t,current_A=I,speed_rpm=n_kiln [kiln rpm]")
+    np.testing.assert_allclose(m.speed, w, atol=1e-5)
+    assert any("kiln-side speed" in n and "1076.5" in n for n in m.notes)
+    # rad/s at the kiln: 2*pi/60 per rpm, then times n
+    p2 = _write(tmp_path / "kiln2.csv", ("t", "I", "w_kiln"),
+                [(a, b, f"{c / N_GEAR * 2 * math.pi / 60:.9g}") for a, b, c in zip(t, i, w)])
+    m2 = read_record(p2, Parameters(), columns="time_s=t,current_A=I,speed_rpm=w_kiln [rad/s @ kiln]")
+    np.testing.assert_allclose(m2.speed, w, atol=1e-5)
+
+
+def test_reference_and_speed_mix_ups_are_noted(tmp_path):
+    t, i, w, r = _start_up()
+    p = _write(tmp_path / "ref.csv", ("t [s]", "I_arm [A]", "n_mot [rpm]", "n_ref [rpm]"), list(zip(t, i, w, r)))
+    # the reference left out of the mapping: said, with the mapping that uses it
+    m = read_record(p, columns="time_s=t,current_A=I_arm,speed_rpm=n_mot")
+    assert any("'n_ref [rpm]' looks like the speed reference" in n and "speed_ref_rpm=n_ref" in n for n in m.notes)
+    # the reference (a noise-free straight ramp, as the test wrote it) read as the measured speed: said
+    m = read_record(p, columns="time_s=t,current_A=I_arm,speed_rpm=n_ref")
+    assert any("noise-free straight ramp" in n for n in m.notes)
+    # the measured speed (noisy) is not taken for a reference
+    m = read_record(p, columns="time_s=t,current_A=I_arm,speed_rpm=n_mot,speed_ref_rpm=n_ref")
+    assert not any("reference" in n for n in m.notes)
+
+
+def test_foreign_plant_record_reads_back_its_truth(tmp_path):
+    # truth: the plant's own logged values (benchmarks/foreign_records.py), written in kA, rad/s and ISO
+    # timestamps with a UTC offset; the reader must return them in A, rpm and seconds
+    from benchmarks import foreign_records as fr
+
+    spec = fr.PlantSpec("t_iso", 4.0, 50.0, base=dict(fr._NUIS), layout="iso_uneven", pre_s=1.0)
+    truth = fr.write_record(spec, tmp_path)
+    logged = fr.logged(spec)
+    m = read_record(truth["csv"], Parameters(), columns=truth["columns"])
+    assert m.n == truth["n_samples"] == logged["t"].size - 2  # two samples dropped on purpose
+    t_log = logged["t"] - logged["t"][0]
+    k = np.abs(t_log[None, :] - m.t[:, None]).argmin(axis=1)  # each read sample's logged sample (us stamps)
+    np.testing.assert_allclose(m.t, t_log[k], atol=2e-6)
+    np.testing.assert_allclose(m.current, logged["i"][k], rtol=1e-5, atol=1e-3)
+    np.testing.assert_allclose(m.speed, logged["n"][k], rtol=1e-5, atol=1e-4)
+
+
+def test_foreign_plant_steady_sliding_matches_the_hand_balance():
+    # truth (NOTES.md, worked steady state): with a burden that slides at constant speed the kiln torque is
+    # mu_c*N*R + bearing torque, so the current is (mu_c m g R cos psi + T_brg)/(n k_i); with mu_s = mu_c the
+    # burden creeps at the kinetic angle tan psi = mu_c R / L
+    from benchmarks import foreign_records as fr
+
+    spec = fr.PlantSpec("t_slide", 24.0, 50.0, base=dict(mu_s=0.4, mu_c=0.4))
+    sim = fr.simulate_plant(spec, h=1e-3)
+    p = fr.TABLE1
+    psi = math.atan(0.4 * p["R"] / p["L"])
+    t_brg = p["mu_brg"] * p["P"] * math.cos(math.pi / 6) * (p["l_brg"] + p["k_brg"]) / 2
+    i_hand = (0.4 * p["m_v"] * p["g"] * p["R"] * math.cos(psi) + t_brg) / (p["n"] * p["k_i"])
+    late = sim["t"] > 19.0
+    assert np.mean(sim["i_a"][late]) == pytest.approx(i_hand, rel=0.01)
+
+
+def test_benchmark_script_help():
+    out = subprocess.run([sys.executable, "-m", "benchmarks.foreign_records", "--help"], capture_output=True,
+                         text=True, timeout=60)
+    assert out.returncode == 0 and "--write DIR" in out.stdout
