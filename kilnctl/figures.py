@@ -17,7 +17,7 @@ from pathlib import Path
 from .errors import KilnctlError
 from .files import atomic_path
 
-__all__ = ["COLORS", "FONT", "save_figure", "record_name", "finish", "limit_line", "note_box"]
+__all__ = ["COLORS", "FONT", "save_figure", "record_name", "finish", "limit_line", "note_box", "Plotted"]
 
 #: colours by role, the same in every figure
 COLORS = {
@@ -38,6 +38,39 @@ COLORS = {
 
 #: font sizes [pt] by role
 FONT = {"suptitle": 11, "title": 9.5, "label": 9.5, "legend": 8, "note": 8.5, "caption": 8.5}
+
+
+class Plotted:
+    """Base of the result objects that draw one standard figure.
+
+    :meth:`plot` makes the figure, or takes the caller's, and a subclass's
+    ``_draw(fig)`` draws its panels into it and returns it; a subclass sets
+    ``figsize`` for a new figure.
+    """
+
+    #: size of a new figure [inch]
+    figsize = (10.0, 8.0)
+
+    def plot(self, fig=None):
+        """Draw the object's standard figure (its panels: the class description) and return it.
+
+        Parameters
+        ----------
+        fig : matplotlib.figure.Figure, optional
+            Figure to draw into; by default a new one of size ``figsize``.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+        """
+        if fig is None:
+            import matplotlib.pyplot as plt
+
+            fig = plt.figure(figsize=self.figsize)
+        return self._draw(fig)
+
+    def _draw(self, fig):  # pragma: no cover - every subclass defines it
+        raise NotImplementedError(f"{type(self).__name__} does not define _draw(fig)")
 
 
 def record_name(source) -> str:

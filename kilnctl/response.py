@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .figures import Plotted
 from .files import write_atomic
 from .params import Parameters
 
@@ -44,8 +45,12 @@ class Event:
 
 
 @dataclass
-class Response:
+class Response(Plotted):
     """Result of a hybrid simulation.
+
+    Its figure (:meth:`plot`): motor current; motor speed with its reference;
+    burden angle with the burden mode shaded; gear bending stress (or mesh
+    force) with the mesh mode.  Event times are marked.
 
     Attributes
     ----------
@@ -180,26 +185,9 @@ class Response:
             write_atomic(path, text)
         return text
 
-    def plot(self, fig=None):
-        """Draw the standard figure set and return the figure.
+    figsize = (10, 9)
 
-        Panels: motor current; motor speed with its reference; burden angle
-        with the burden mode shaded; gear bending stress (or mesh force) with
-        the mesh mode.  Event times are marked.
-
-        Parameters
-        ----------
-        fig : matplotlib.figure.Figure, optional
-            Figure to draw into (a new one by default).
-
-        Returns
-        -------
-        matplotlib.figure.Figure
-        """
-        import matplotlib.pyplot as plt
-
-        if fig is None:
-            fig = plt.figure(figsize=(10, 9))
+    def _draw(self, fig):
         axes = fig.subplots(4, 1, sharex=True)
         t, y = self.t, self.outputs
         axes[0].plot(t, y["i_a"], color="C0")

@@ -16,6 +16,7 @@ import control as ct
 import numpy as np
 
 from .errors import SimulationError
+from .figures import COLORS, Plotted, finish
 from .params import Parameters
 from .response import Response
 from .units import RPM_PER_RAD_S
@@ -71,8 +72,11 @@ def ramp_figures(t, speed_rpm, current_a, params: Parameters) -> dict:
 
 
 @dataclass
-class Verification:
+class Verification(Plotted):
     """Linear prediction against the nonlinear response of one start-up.
+
+    Its figure (:meth:`plot`): speed and current, the linear stick/slip
+    predictions and the nonlinear run.
 
     Attributes
     ----------
@@ -120,23 +124,9 @@ class Verification:
         lines += [f"- {r}" for r in self.reasons]
         return "\n".join(lines)
 
-    def plot(self, fig=None):
-        """Speed and current: linear stick/slip predictions and the nonlinear run.
+    figsize = (10, 7.4)
 
-        Parameters
-        ----------
-        fig : matplotlib.figure.Figure, optional
-            Figure to draw into (a new one by default).
-
-        Returns
-        -------
-        matplotlib.figure.Figure
-        """
-        import matplotlib.pyplot as plt
-
-        from .figures import COLORS, finish
-
-        fig = fig or plt.figure(figsize=(10, 7.4))
+    def _draw(self, fig):
         ax1, ax2 = fig.subplots(2, 1, sharex=True)
         r = self.nonlinear
         # stick and slip predictions lie almost on each other: stick wide and pale, slip thin on top

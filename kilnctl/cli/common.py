@@ -154,6 +154,22 @@ def load_params(args) -> Parameters:
     return params
 
 
+def print_written(files, width: int) -> None:
+    """Print one ``wrote`` line for each output file that was asked for.
+
+    Parameters
+    ----------
+    files : sequence of (str, path-like or None)
+        Label and path of each output; a None or empty path was not asked for.
+    width : int
+        Characters the label column takes, so the paths line up with the
+        summary lines above them [characters].
+    """
+    for label, path in files:
+        if path:
+            print(f"  wrote {label:<{width}}{path}")
+
+
 def same_file(a, b) -> bool:
     """True if two paths name the same file (existing or not).
 

@@ -11,7 +11,7 @@ from ..errors import SimulationError
 from ..params import SPECS
 from . import print_json
 from ..figures import save_figure
-from .common import Command, add_options, check_output_files, load_params
+from .common import Command, add_options, check_output_files, load_params, print_written
 
 #: default simulated time [s]: long enough for the paper's 15-17 s settling (Fig. 4, 5)
 DEFAULT_T_END = 40.0
@@ -86,9 +86,7 @@ class SimulateCommand(Command):
         print(f"  burden at end    {s['burden_mode_final']}")
         kinds = ", ".join(f"{k} {v}" for k, v in s["events_by_kind"].items()) or "none"
         print(f"  mode switches    {s['n_events']} ({kinds})")
-        for flag, path in (("csv", args.csv), ("plot", args.plot)):
-            if path:
-                print(f"  wrote {flag:<5}      {path}")
+        print_written((("csv", args.csv), ("plot", args.plot)), 11)
         return 0
 
 

@@ -14,7 +14,7 @@ from pathlib import Path
 
 from ..errors import ConfigFileError, KilnctlError
 from . import print_json
-from .common import Command, add_options, check_output_files, warn_implausible
+from .common import Command, add_options, check_output_files, print_written, warn_implausible
 
 #: default folder of finished points, relative to the current folder
 DEFAULT_CACHE = Path(".kilnctl_cache") / "sweep"
@@ -104,9 +104,7 @@ class SweepCommand(Command):
         if i["n_failed"]:
             first = result.table[result.table["status"] != "ok"].iloc[0]
             print(f"  first failure  point {first.name}: {first['error']}")
-        for flag, path in (("table", args.out), ("plot", args.plot)):
-            if path:
-                print(f"  wrote {flag:<8} {path}")
+        print_written((("table", args.out), ("plot", args.plot)), 9)
         return 0
 
 

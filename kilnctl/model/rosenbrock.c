@@ -20,20 +20,12 @@
 #include <string.h>
 
 typedef long long int cint;
-int kf(const double** arg, double** res, cint* iw, double* w, int mem);
-int kf_work(cint* sz_arg, cint* sz_res, cint* sz_iw, cint* sz_w);
-int kj(const double** arg, double** res, cint* iw, double* w, int mem);
-int kj_work(cint* sz_arg, cint* sz_res, cint* sz_iw, cint* sz_w);
-int kt(const double** arg, double** res, cint* iw, double* w, int mem);
-int kt_work(cint* sz_arg, cint* sz_res, cint* sz_iw, cint* sz_w);
-int kg(const double** arg, double** res, cint* iw, double* w, int mem);
-int kg_work(cint* sz_arg, cint* sz_res, cint* sz_iw, cint* sz_w);
-int ko(const double** arg, double** res, cint* iw, double* w, int mem);
-int ko_work(cint* sz_arg, cint* sz_res, cint* sz_iw, cint* sz_w);
-int kd(const double** arg, double** res, cint* iw, double* w, int mem);
-int kd_work(cint* sz_arg, cint* sz_res, cint* sz_iw, cint* sz_w);
-int kp(const double** arg, double** res, cint* iw, double* w, int mem);
-int kp_work(cint* sz_arg, cint* sz_res, cint* sz_iw, cint* sz_w);
+/* each generated CasADi function NAME comes with its work-size query NAME_work */
+#define CASADI_FN(name) \
+    int name(const double** arg, double** res, cint* iw, double* w, int mem); \
+    int name##_work(cint* sz_arg, cint* sz_res, cint* sz_iw, cint* sz_w);
+CASADI_FN(kf) CASADI_FN(kj) CASADI_FN(kt) CASADI_FN(kg) CASADI_FN(ko) CASADI_FN(kd) CASADI_FN(kp)
+#undef CASADI_FN
 
 #define NMAX 64
 #define GMAX 64

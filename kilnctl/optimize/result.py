@@ -6,6 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..figures import COLORS, Plotted, finish, limit_line
 from .problem import RampProblem
 from .verify import StartupMeasures
 
@@ -56,8 +57,11 @@ def _worst(measures: dict, kind: str) -> tuple[str, StartupMeasures]:
 
 
 @dataclass
-class RampResult:
+class RampResult(Plotted):
     """An optimized start-up ramp, predicted on the smooth model and verified on the hybrid plant.
+
+    Its figure (:meth:`plot`): reference, bending stress and current, the
+    optimum against the baseline.
 
     Attributes
     ----------
@@ -281,24 +285,9 @@ class RampResult:
         name = _profile_name(s["profile"])
         return f"{name[0].upper()}{name[1:]} ramp: {first}; {second}"
 
-    def plot(self, fig=None):
-        """Draw reference, bending stress and current: optimum against the baseline.
+    figsize = (10, 8.5)
 
-        Parameters
-        ----------
-        fig : matplotlib.figure.Figure, optional
-            Figure to draw into (a new one by default).
-
-        Returns
-        -------
-        matplotlib.figure.Figure
-        """
-        import matplotlib.pyplot as plt
-
-        from ..figures import COLORS, finish, limit_line
-
-        if fig is None:
-            fig = plt.figure(figsize=(10, 8.5))
+    def _draw(self, fig):
         ax = fig.subplots(3, 1, sharex=True)
         hyb, base, sm = self.traces.get("hybrid"), self.traces.get("baseline"), self.traces.get("smooth")
         prob = self.problem
