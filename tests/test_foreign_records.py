@@ -134,3 +134,23 @@ def test_benchmark_script_help():
     out = subprocess.run([sys.executable, "-m", "benchmarks.foreign_records", "--help"], capture_output=True,
                          text=True, timeout=60)
     assert out.returncode == 0 and "--write DIR" in out.stdout
+
+
+def test_missing_samples_and_jitter_are_noted(tmp_path):
+    # truth: the test drops samples 100, 101 and 300 (steps of 3 and 2 medians) and, in a second file,
+    # jitters every time by up to +-30 % of the step; neither is a gap (> 5 medians), both are said
+    t, i, w, _ = _start_up()
+    keep = np.ones(t.size, bool)
+    keep[[100, 101, 300]] = False
+    p = _write(tmp_path / "drop.csv", ("time_s", "current_A", "speed_rpm"), list(zip(t[keep], i[keep], w[keep])))
+    m = read_record(p)
+    note = next(n for n in m.notes if "missing samples" in n)
+    # longest step 3 x 0.05 s from t = 4.95 s to 5.1 s; sample 102 is the file's line 102 - 2 + 3 (two dropped,
+    # comment and header before sample 0 on line 3)
+    assert note.startswith("2 step(s)") and "the longest 0.15 s between t = 4.95 s and 5.1 s (line 103)" in note
+    assert not any("uneven" in n for n in m.notes)
+    tj = t + np.random.default_rng(3).uniform(-0.3, 0.3, t.size) * 0.05
+    p2 = _write(tmp_path / "jitter.csv", ("time_s", "current_A", "speed_rpm"), list(zip(tj, i, w)))
+    m2 = read_record(p2)
+    assert any(n.startswith("uneven time base") for n in m2.notes)
+    assert not any("missing samples" in n for n in m2.notes)  # jitter alone is not taken for missing samples

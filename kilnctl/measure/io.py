@@ -815,7 +815,27 @@ def _checked(arrays, lines, source, params, notes, row_word, labels=None, log=Fa
     _check_time_scale(t, med, source, labels.get("time_s", "'time_s'"), params, math.inf if log else MAX_RECORD_S,
                       time_name, arrays.get("speed_rpm"))
     _check_units(arrays, lines, source, params, row_word, labels, log)
+    if not log:
+        notes = tuple(notes) + tuple(_sampling_notes(t, dts, med, lines, row_word))
     return Measurement(t=t, channels=arrays, source=source, lines=lines, notes=tuple(notes), row_word=row_word)
+
+
+def _sampling_notes(t, dts, med, lines, row_word) -> list[str]:
+    """Say how uneven the time base is: jitter, and steps that look like missing samples (beyond the jitter)."""
+    out = []
+    spread = float(1.4826 * np.median(np.abs(dts - med)) / med)  # robust relative spread of the steps
+    if spread > 0.02:
+        out.append(f"uneven time base: steps of {np.min(dts):.4g}-{np.max(dts):.4g} s (median {med:.4g} s, "
+                   f"spread {100 * spread:.0f} %); the model is compared at the measured times")
+    limit = max(1.5, 1.0 + 4.0 * spread)
+    long_steps = np.flatnonzero(dts > limit * med)
+    if long_steps.size:
+        k = int(long_steps[np.argmax(dts[long_steps])])
+        out.append(f"{long_steps.size} step(s) of {limit:.3g}-{GAP_FACTOR:g} x the median step {med:.4g} s (missing "
+                   f"samples?), the longest {dts[k]:.4g} s between t = {t[k]:.6g} s and {t[k + 1]:.6g} s ({row_word} "
+                   f"{int(lines[k + 1])}); "
+                   "compared as they are, nothing interpolated")
+    return out
 
 
 #: longest start-up record compare and diagnose accept [s]: a start-up, not a shift (split a log first)
