@@ -252,6 +252,9 @@ LAYOUTS = {
     "uneven": dict(cols=("time", "motor_current_A", "motor_speed_rpm", "kiln_speed_rpm", "quality"),
                    conv=(1.0, 1.0, 1.0, None), drop=0,
                    columns="time_s=time,current_A=motor_current_A,speed_rpm=motor_speed_rpm"),
+    # only the kiln's speed is logged (rpm at the kiln), names with spaces
+    "kiln": dict(cols=("Time [s]", "Motor current [A]", "Kiln speed [rpm]"), conv=(1.0, 1.0, 1.0 / 1076.5), drop=0,
+                 columns="time_s=Time,current_A=Motor current,speed_rpm=Kiln speed [kiln rpm]"),
     # ISO timestamps with offset, uneven, kA
     "iso_uneven": dict(cols=("ts", "I [kA]", "speed [rpm]"), conv=(None, 1e-3, 1.0), drop=2,
                        columns="time_s=ts,current_A=I [kA],speed_rpm=speed [rpm]"),
@@ -336,6 +339,16 @@ RECORDS = [
     PlantSpec("f6_coulomb", 90.0, 10.0, base=_NUIS, setup_kiln=dict(friction_law="torque"),
               effects={"coulomb": {"T": 60.0}}, expected=("motor_coulomb_friction",), layout="plain",
               note="motor-side Coulomb friction 60 N m; 10 Hz, 90 s"),
+    PlantSpec("f6b_coulomb_paperlaw", 90.0, 10.0, base=_NUIS, effects={"coulomb": {"T": 60.0}},
+              expected=("torque_friction_law", "motor_coulomb_friction"), layout="plain",
+              note="f6's plant, the setup not knowing the torque law"),
+    PlantSpec("f7_load_step", 45.0, 50.0, base=_NUIS, effects={"load_step": {"T": 3e5, "t": 28.0}},
+              expected=("torque_friction_law", "unexplained"), layout="ms",
+              note="load torque of 3e5 N m at the kiln from t = 28 s (not in the catalogue); setup not knowing the "
+                   "torque law"),
+    PlantSpec("f8_kiln_speed", 120.0, 25.0, base=_NUIS, effects={"J2": {"J": 21.5}},
+              expected=("torque_friction_law", "second_motor"), layout="kiln",
+              note="the paper's second motor (21.5 kg m^2); only the kiln speed logged; 120 s at 25 Hz"),
 ]
 
 

@@ -154,3 +154,34 @@ def test_missing_samples_and_jitter_are_noted(tmp_path):
     m2 = read_record(p2)
     assert any(n.startswith("uneven time base") for n in m2.notes)
     assert not any("missing samples" in n for n in m2.notes)  # jitter alone is not taken for missing samples
+
+
+def test_diagnose_says_how_the_record_was_read_before_the_search(tmp_path, monkeypatch, capsys):
+    # truth: the file is in kA with its reference left unmapped; both notes must be on stderr before the
+    # (minutes-long) search starts, so a mix-up is seen at once.  The search itself is replaced by a stop.
+    import argparse
+
+    from kilnctl.cli import diagnose_cmd
+    from kilnctl.measure import diagnose
+
+    t, i, w, r = _start_up()
+    p = _write(tmp_path / "rec.csv", ("t [s]", "I [kA]", "n_mot [rpm]", "n_ref [rpm]"),
+               list(zip(t, i / 1e3, w, r)))
+
+    class Stop(Exception):
+        pass
+
+    seen = {}
+
+    def fake_fit(self, measurement, progress=None):
+        seen["stderr"] = capsys.readouterr().err
+        raise Stop
+
+    monkeypatch.setattr(diagnose.Diagnosis, "fit", fake_fit)
+    ap = argparse.ArgumentParser()
+    diagnose_cmd.register(ap.add_subparsers())
+    args = ap.parse_args(["diagnose", "--data", str(p), "--columns", "time_s=t,current_A=I,speed_rpm=n_mot"])
+    with pytest.raises(Stop):
+        args.func(args)
+    assert "record: current_A converted from kA to A (x 1000)" in seen["stderr"]
+    assert "record: 'n_ref [rpm]' looks like the speed reference" in seen["stderr"]

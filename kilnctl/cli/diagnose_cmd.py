@@ -72,10 +72,16 @@ class DiagnoseCommand(Command):
         d = Diagnosis(setup.params, calibrate, candidates, model=args.model, holdout=args.holdout,
                       t0=setup.options.get("t0_s"), workers=args.workers)
         progress = None if (args.quiet or args.json) else (lambda s: print(s, file=sys.stderr, flush=True))
+        if progress is not None:
+            # how the file was read, before the long search: a unit or column mix-up shows at once
+            for note in data.notes:
+                progress(f"record: {note}")
         d.fit(data, progress=progress)
         written = d.report(args.report, protect=(args.data, args.config)) if args.report else []
         if args.json:
-            print_json(d.to_dict())
+            out = d.to_dict()
+            out["record_notes"] = list(data.notes)  # how the file was read: units converted, columns ignored
+            print_json(out)
             return 0
         print(d.summary())
         for note in data.notes:
