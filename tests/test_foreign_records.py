@@ -185,3 +185,36 @@ def test_diagnose_says_how_the_record_was_read_before_the_search(tmp_path, monke
         args.func(args)
     assert "record: current_A converted from kA to A (x 1000)" in seen["stderr"]
     assert "record: 'n_ref [rpm]' looks like the speed reference" in seen["stderr"]
+
+
+@pytest.mark.parametrize("layout", ["units_row", "decimal_comma_cp1252", "trailing_separator"])
+def test_european_and_spreadsheet_csv_exports(tmp_path, layout):
+    # truth: the values the test wrote; each layout is a common export of a historian or of Excel
+    t, i, w, _ = _start_up(n=300)
+    rows = [(f"{a:.3f}", f"{b:.4f}", f"{c:.4f}") for a, b, c in zip(t, i, w)]
+    p = tmp_path / "rec.csv"
+    if layout == "units_row":  # names on line 1, units on line 2 (kA: converted)
+        p.write_text("Zeit;Strom;Drehzahl\ns;kA;1/min\n" + "\n".join(
+            f"{a};{float(b) / 1e3:.7f};{c}" for a, b, c in rows) + "\n")
+        m = read_record(p, columns="time_s=Zeit,current_A=Strom,speed_rpm=Drehzahl")
+        assert "units read from line 2 (under the header)" in m.notes
+    elif layout == "decimal_comma_cp1252":  # German Windows export: ';', decimal commas, an umlaut in a name
+        text = "Zeit [s];Strom Läufer [A];Drehzahl [1/min]\n" + "\n".join(
+            ";".join(x.replace(".", ",") for x in r) for r in rows) + "\n"
+        p.write_bytes(text.encode("cp1252"))
+        m = read_record(p, columns="time_s=Zeit,current_A=Strom Läufer,speed_rpm=Drehzahl")
+        assert any("Windows-1252" in n for n in m.notes) and any("decimal commas" in n for n in m.notes)
+    else:  # a separator at the end of every line: an empty last column
+        p.write_text("time_s,current_A,speed_rpm,\n" + "\n".join(",".join(r) + "," for r in rows) + "\n")
+        m = read_record(p)
+    np.testing.assert_allclose(m.t, t, atol=1e-3)
+    np.testing.assert_allclose(m.current, i, atol=1e-3)
+    np.testing.assert_allclose(m.speed, w, atol=1e-3)
+
+
+def test_comma_separated_file_with_decimal_commas_is_still_refused(tmp_path):
+    # with ',' as the separator a decimal comma cannot be told from a separator: the message says so
+    p = tmp_path / "rec.csv"
+    p.write_text("time_s,current_A,speed_rpm\n" + "\n".join(f'{k * 0.05:.2f},"1,5",{k}' for k in range(100)))
+    with pytest.raises(DataError, match=r"line 2, column 'current_A': '1,5' is not a number \(decimal comma"):
+        read_record(p)

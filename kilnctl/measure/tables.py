@@ -263,26 +263,56 @@ def read_table(path, kind: str | None = None) -> RawTable:
     return {"csv": _read_text, "excel": _read_excel, "parquet": _read_parquet, "matlab": _read_mat}[kind](path)
 
 
+_DECIMAL_COMMA = re.compile(r"^[+-]?\d+,\d*(?:[eE][+-]?\d+)?$")
+
+
+def _unit_cell(cell: str) -> str | None:
+    """A cell of a units row under the header: ``s``, ``[A]``, ``(1/min)`` -> the unit; None if it is not one."""
+    u = cell.strip()
+    if len(u) >= 2 and u[0] + u[-1] in ("[]", "()"):
+        u = u[1:-1].strip()
+    return u if (_quantity_of_unit(u) or u.lower() in AMBIGUOUS) else None
+
+
 def _read_text(path: Path) -> RawTable:
     raw = path.read_bytes()
+    notes = []
     try:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
-        raise DataError(f"{path}: not a UTF-8 text file ({exc.reason} at byte {exc.start}); "
-                        "export it as UTF-8 CSV, or give the .xlsx/.parquet/.mat file itself") from None
+        if b"\x00" in raw:
+            raise DataError(f"{path}: not a text file ({exc.reason} at byte {exc.start}); export it as UTF-8 CSV, "
+                            "or give the .xlsx/.parquet/.mat file itself") from None
+        # exports of Windows tools are often Windows-1252 (a degree sign, an umlaut in a name): read so, and say so
+        text = raw.decode("cp1252", errors="replace")
+        notes.append(f"not UTF-8 ({exc.reason} at byte {exc.start}): read as Windows-1252")
     header = None
     cells: list[list[str]] = []
     lines: list[int] = []
     delim = ","
+    units_line = None
     for lineno, line in enumerate(text.splitlines(), start=1):
         s = line.strip()
         if not s or s.startswith("#"):
             continue
         if header is None:
             delim = ";" if (";" in s and "," not in s) else ("\t" if ("\t" in s and "," not in s) else ",")
-            header = (lineno, [h.strip() for h in next(csv.reader([s], delimiter=delim))])
+            names = [h.strip() for h in next(csv.reader([s], delimiter=delim))]
+            while len(names) > 1 and not names[-1]:  # a trailing separator: an empty last column
+                names.pop()
+            header = (lineno, names)
             continue
         row = [c.strip() for c in next(csv.reader([s], delimiter=delim))]
+        while len(row) > len(header[1]) and not row[-1]:
+            row.pop()
+        if not cells and units_line is None and any(row) and all(_unit_cell(c) or not c for c in row) \
+                and len(row) == len(header[1]):
+            # a units row under the header (``s;A;rpm``): the units join the names, as ``Time [s]``
+            units_line = lineno
+            header = (lineno, [f"{nm} [{_unit_cell(u)}]" if u and split_unit(nm)[1] is None else nm
+                               for nm, u in zip(header[1], row)])
+            notes.append(f"units read from line {lineno} (under the header)")
+            continue
         if len(row) != len(header[1]):
             raise DataError(f"{path}: line {lineno}: {len(row)} cells, but the header (line {header[0]}) "
                             f"has {len(header[1])} columns")
@@ -294,8 +324,24 @@ def _read_text(path: Path) -> RawTable:
     if not cells:
         raise DataError(f"{path}: no data rows after the header (line {hline})")
     arr = np.array(cells, dtype=object)
-    return RawTable(names, [arr[:, j] for j in range(len(names))], np.array(lines), "line", str(path),
-                    f"line {hline} (header)")
+    if delim != ",":
+        # decimal commas (``1,5``) in a file separated by ';' or tabs, where a comma can mean nothing else;
+        # only when no cell of the file has a decimal point, so a file never mixes both readings
+        flat = [c for r in cells for c in r]
+        if any(_DECIMAL_COMMA.match(c) for c in flat) and not any("." in c and _is_number(c) for c in flat):
+            arr = np.array([[c.replace(",", ".") if _DECIMAL_COMMA.match(c) else c for c in r] for r in cells],
+                           dtype=object)
+            notes.append("decimal commas read as decimal points (a ';'- or tab-separated file)")
+    head = f"line {hline} (header)" + (f" and {units_line} (units)" if units_line else "")
+    return RawTable(names, [arr[:, j] for j in range(len(names))], np.array(lines), "line", str(path), head, notes)
+
+
+def _is_number(c: str) -> bool:
+    try:
+        float(c)
+        return True
+    except ValueError:
+        return False
 
 
 def _need(module: str, extra: str, path: Path):
