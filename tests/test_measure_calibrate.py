@@ -29,7 +29,7 @@ def test_autocovariance_of_a_gapped_series_by_direct_sums():
 def _problem(meas_current, cycles_from):
     t = np.arange(meas_current.size) / FS
     m = Measurement.from_arrays(t, meas_current + 500.0, np.full(t.size, 500.0), np.full(t.size, 500.0))
-    exp = SimpleNamespace(t0=0.0)
+    exp = SimpleNamespace(t0=0.0, ramp_rate=74.0, omega_ref=500.0)
     prob = _Problem(m, exp, Parameters(), "macro", (), {"current_A": 10.0, "speed_rpm": 1.0}, None)
     prob.cycles_from = cycles_from
     return prob, t

@@ -212,7 +212,8 @@ class _Problem:
     def __init__(self, measurement, experiment, params, model, effects, scales, mask):
         self.m = measurement
         self.exp = experiment
-        self.params = params
+        # the record's ramp set once (run_model would otherwise build the parameter set twice per trial run)
+        self.params = params.replace(ramp_rate=experiment.ramp_rate, omega_ref=experiment.omega_ref)
         self.model = model
         self.effects = tuple(effects)
         active = measurement.t >= experiment.t0 - 1e-9

@@ -365,7 +365,20 @@ class Diagnosis:
             results = self._try_all(m, params, selected, names, current, scales, train, test, exp, pool, say,
                                     before)
             results.sort(key=_rank)
-            current, results = self._reanchor(m, params, selected, current, results, scales, train, test, exp, say)
+            anchored, results = self._reanchor(m, params, selected, current, results, scales, train, test, exp, say)
+            n_fit = sum(anchored.n_.values())
+            if anchored is not current and n_fit * math.log(current.cost_ / anchored.cost_) > self.min_delta_bic:
+                # the current structure reached a better valley from a candidate's base values: every candidate
+                # was refitted from the old one (its effect then bought an escape from that valley, which the
+                # evidence would credit it with), so the round is refitted from the new model, once, when the
+                # escape alone would count as evidence (n ln(cost ratio) above the BIC threshold)
+                current = anchored
+                say("  candidates refitted from the re-anchored model")
+                results = self._try_all(m, params, selected, names, current, scales, train, test, exp, pool, say,
+                                        before)
+                results.sort(key=_rank)
+                current, results = self._reanchor(m, params, selected, current, results, scales, train, test, exp,
+                                                  say)
             abrupt = self._outside(m, params, selected, current, results, scales, train, test, exp, say)
             rounds.append(results)
             if abrupt is not None:
@@ -983,13 +996,16 @@ def _holdout_z(m, cal, current, exp, te, scales) -> float:
 
 
 def _corrected_delta_bic(m, cal, current, exp, train) -> float:
-    """delta BIC of the two models' residuals whitened by the candidate's noise model (generalised least squares).
+    """delta BIC of the two models with the coloured noise modelled (feasible generalised least squares).
 
     Coloured noise makes neighbouring residuals nearly repeat each other, and an ordinary BIC counts each as
     new evidence: a slow change of the model (a drift, an offset over the ramp) then looks far better supported
-    than it is.  Each channel's residual of the candidate gets an autoregressive noise model
-    (:func:`noise_filter`); both models' residuals pass through that same filter, and BIC compares the whitened
-    sums of squares on the fitting part, as the Gaussian likelihood with that noise does.
+    than it is.  Per channel, an autoregressive noise model (:func:`noise_filter`) is estimated from the
+    residual of the model that fits that channel better on the fitting part (the closer estimate of the
+    noise: the other one still holds what it misses), both residuals pass through that one whitening filter,
+    and BIC compares the whitened sums of squares on the fitting part.  A filter estimated from each model's
+    own residual would let a model's misfit pass for noise (a step the model misses looks like slow noise);
+    one estimated always from the candidate's would let a candidate that fits worse choose the yardstick.
     """
     active = m.t >= exp.t0 - 1e-9
     tr = train[active]
@@ -997,7 +1013,8 @@ def _corrected_delta_bic(m, cal, current, exp, train) -> float:
     for c in CHANNELS:
         y = m.channels[c][active]
         e_new, e_old = y - cal.run_.outputs[c], y - current.run_.outputs[c]
-        a = noise_filter(e_new)
+        ref = e_new if float(e_new[tr] @ e_new[tr]) <= float(e_old[tr] @ e_old[tr]) else e_old
+        a = noise_filter(ref)
         w_new, w_old = whiten(e_new, a)[tr], whiten(e_old, a)[tr]
         val += tr.sum() * math.log(max(float(w_new @ w_new), 1e-300) / max(float(w_old @ w_old), 1e-300))
         n_tot += int(tr.sum())

@@ -123,7 +123,9 @@ def run_model(params: Parameters, measurement: Measurement, experiment: Experime
     """
     from ..simulate import simulate
 
-    p = params.replace(ramp_rate=experiment.ramp_rate, omega_ref=experiment.omega_ref)
+    p = params
+    if params.ramp_rate != experiment.ramp_rate or params.omega_ref != experiment.omega_ref:
+        p = params.replace(ramp_rate=experiment.ramp_rate, omega_ref=experiment.omega_ref)
     active = measurement.t >= experiment.t0 - 1e-9
     t = measurement.t[active]
     t_end = float(t[-1] - experiment.t0)
