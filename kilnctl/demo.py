@@ -133,7 +133,7 @@ def main(argv=None) -> int:
     crit = Diagnosis()  # the example is diagnosed with the default criteria
     print("  Each catalogued effect is added to the calibrated model in turn. dBIC: change of the information "
           f"criterion\n  (negative favours the effect, below {-crit.min_delta_bic:g} counts); held-out gain: better "
-          f"prediction of the samples not fitted\n  (worse by more than {crit.holdout_z:g} standard errors: rejected). An effect is "
+          f"prediction of the samples not fitted\n  (above {crit.min_holdout_gain:g} % counts). An effect is "
           "supported when it passes both; the best one is added and the search repeats.")
 
     diagnose_example(out, progress=lambda line: print("  " + line))

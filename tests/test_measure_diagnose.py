@@ -267,7 +267,7 @@ def test_report_reads_without_statistics_and_loads_in_a_browser(second_motor_cas
     text = (tmp_path / "page" / "diagnose.html").read_text()
     assert "± inf" not in text and "+- inf" not in text and "{'" not in text  # no infinities, no Python dicts
     # truth: the diagnosis' own thresholds are the ones the how-to-read box explains
-    assert f"below −{d.min_delta_bic:g}" in text and f"below −{d.holdout_z:g} standard errors" in text
+    assert f"below −{d.min_delta_bic:g}" in text and f"more than {d.min_holdout_gain:g} %" in text
     assert "Missing from the model: second motor" in text
     out = load_in_chromium(tmp_path / "page" / "diagnose.html")
     assert out["errors"] == [] and out["broken_images"] == [] and out["images"] == 2

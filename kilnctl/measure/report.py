@@ -374,7 +374,8 @@ def diagnosis_dict(d) -> dict:
         "experiment": d.experiment_.to_dict(),
         "settings": {"calibrate": list(d.calibrate), "candidates": list(d.candidates), "model": d.model,
                      "holdout": d.holdout, "holdout_fraction": d.holdout_fraction,
-                     "min_delta_bic": d.min_delta_bic, "holdout_z": d.holdout_z},
+                     "min_delta_bic": d.min_delta_bic, "min_holdout_gain_percent": d.min_holdout_gain,
+                     "holdout_z": d.holdout_z},
         "wall_s": d.wall_s_,
     }
 
@@ -424,7 +425,7 @@ def diagnosis_summary(d) -> str:
         lines.append(f"    {'effect':<22} {'dBIC':>10} {'held-out':>9} {'fit I %':>8}  verdict")
         for r in rnd:
             fi = r.fit_percent.get("current_A", math.nan)
-            lines.append(f"    {r.effect:<22} {r.delta_bic_corrected:>10.1f} {r.holdout_gain:>8.1f}% {fi:>8.1f}  "
+            lines.append(f"    {r.effect:<22} {r.delta_bic:>10.1f} {r.holdout_gain:>8.1f}% {fi:>8.1f}  "
                          f"{'SUPPORTED' if r.supported else r.reason}")
     lines.append(f"  selected: {', '.join(d.selected_) or 'nothing'}")
     lines.append(f"  final: {format_fit(d.final_)}")
@@ -482,30 +483,30 @@ def plot_ranking(d, fig=None):
     names = [r.effect for r in rk]
     colors = [COLORS["supported"] if r.supported else COLORS["rejected"] for r in rk]
     y = np.arange(len(rk))
-    dbic = [max(-1e6, r.delta_bic_corrected) if math.isfinite(r.delta_bic_corrected) else 0 for r in rk]
+    dbic = [max(-1e6, r.delta_bic) if math.isfinite(r.delta_bic) else 0 for r in rk]
     a0.barh(y, [-v for v in dbic], color=colors)
     a0.set_xscale("symlog", linthresh=10)
     a0.axvline(d.min_delta_bic, color=COLORS["threshold"], ls=":", label=f"threshold {d.min_delta_bic:g}")
     a0.axvline(0, color="0.3", lw=0.6)
     a0.set_yticks(y, names, fontsize=8)
     a0.invert_yaxis()
-    a0.set_xlabel("-dBIC on the fitted part, coloured noise modelled [-]\n(log scale beyond 10)")
+    a0.set_xlabel("BIC improvement -dBIC on the fitted part [-]\n(log scale beyond 10)")
     a0.set_title("evidence in the fitted part (more is better)", fontsize=9)
     a0.legend(handles=[Patch(color=COLORS["supported"], label="supported (both tests)"),
                        Patch(color=COLORS["rejected"], label="not supported"),
                        *a0.get_legend_handles_labels()[0]], fontsize=7.5, loc="lower right")
-    gains = [r.holdout_z if math.isfinite(r.holdout_z) else 0 for r in rk]
+    gains = [r.holdout_gain if math.isfinite(r.holdout_gain) else 0 for r in rk]
     a1.barh(y, [max(-100.0, g) for g in gains], color=colors)
-    lim = min(105.0, max(5.0, 1.15 * max([abs(g) for g in gains] + [d.holdout_z])))
+    lim = min(105.0, max(10.0, 1.15 * max([abs(g) for g in gains] + [d.min_holdout_gain])))
     a1.set_xlim(-lim, lim)
     for yy, g in zip(y, gains):
         if g < -lim:
-            a1.text(-lim, yy, f" {g:.0f}", va="center", ha="left", fontsize=7)
-    a1.axvline(-d.holdout_z, color=COLORS["threshold"], ls=":", label=f"threshold {-d.holdout_z:g}")
+            a1.text(-lim, yy, f" {g:.0f} %", va="center", ha="left", fontsize=7)
+    a1.axvline(d.min_holdout_gain, color=COLORS["threshold"], ls=":", label=f"threshold {d.min_holdout_gain:g} %")
     a1.axvline(0, color="0.3", lw=0.6)
     a1.set_yticks(y, [""] * len(y))
     a1.invert_yaxis()
-    a1.set_xlabel("held-out gain [standard errors]:\nerror reduction on samples not fitted")
+    a1.set_xlabel("held-out gain [%]:\nerror reduction on samples not fitted")
     a1.set_title("prediction of unseen samples (more is better)", fontsize=9)
     a1.legend(fontsize=7.5, loc="lower right")
     chans = list(d.baseline_)
@@ -615,14 +616,15 @@ HOW_TO_READ = {
                                               "grey 99 % band; many lags outside mean the model misses something "
                                               "with a time structure."),
     "dbic": ("dBIC", "How much the Bayesian information criterion falls when an effect is added, on the fitting "
-                     "part of the record, with the residual's coloured noise modelled (both residuals whitened by "
-                     "the same autoregressive filter, so that a slow change is not counted once per sample). It "
-                     "charges for every extra parameter; below −{min_delta_bic:g} counts as very strong evidence."),
-    "heldout": ("held-out gain", "How much better (in %, and in standard errors) the model with the effect "
-                                 "predicts the part of the record it was not fitted on. An effect that only lines "
-                                 "up the fitted part's events predicts the rest worse; below −{holdout_z:g} "
-                                 "standard errors it is rejected. An effect is <b>supported</b> only when it "
-                                 "passes both tests."),
+                     "part of the record. It charges for every extra parameter; below −{min_delta_bic:g} counts as "
+                     "very strong evidence. It alone is fooled by coloured noise, hence the second test."),
+    "heldout": ("held-out gain", "How much better (in %) the model with the effect predicts the part of the "
+                                 "record it was not fitted on. An effect that only fits noise gains nothing "
+                                 "there; it must gain more than {min_holdout_gain:g} %. An effect whose trace lies "
+                                 "mostly in the fitted part may instead pass with a BIC that also falls by more "
+                                 "than {min_delta_bic:g} with the coloured noise modelled, and a held-out loss of "
+                                 "less than {holdout_z:g} standard errors. An effect is <b>supported</b> only when "
+                                 "it passes both tests."),
     "cautions": ("cautions", "Where the evidence is weaker than the numbers suggest (a record shorter than the "
                              "effect's period, a strongly autocorrelated residual). Read them before acting."),
     "uncertainty": ("± values", "One standard error of a fitted value from the fit's curvature. \"not "
@@ -650,7 +652,7 @@ def how_to_read(keys, **values) -> str:
     keys : sequence of str
         Terms of :data:`HOW_TO_READ`, in order.
     **values
-        Numbers the texts name (``min_delta_bic``, ``holdout_z``).
+        Numbers the texts name (``min_delta_bic``, ``min_holdout_gain``, ``holdout_z``).
 
     Returns
     -------
@@ -796,7 +798,8 @@ _DIAGNOSIS_SETTINGS = {
     "holdout": "how the held-out part is chosen",
     "holdout_fraction": "share of the record held out [-]",
     "min_delta_bic": "a candidate must lower BIC by more than this [-]",
-    "holdout_z": "... and not predict the held-out part worse by more than this many standard errors [-]",
+    "min_holdout_gain_percent": "... and improve the held-out fit by more than this [%]",
+    "holdout_z": "... or else not predict it worse by more than this many standard errors [-]",
 }
 
 
@@ -842,7 +845,7 @@ def diagnosis_html(d, figs=None) -> str:
                 sel.add(j)
             pars = "; ".join(f"{k} = {_value_words(v['value'], v['stderr'], k in r.not_identifiable, v['unit'])}"
                              for k, v in r.parameters.items() if k in _effect_params(r.effect))
-            rows.append((r.effect, f"{r.delta_bic_corrected:.1f}", _signed(r.holdout_gain),
+            rows.append((r.effect, f"{r.delta_bic:.1f}", _signed(r.holdout_gain),
                          f"{r.fit_percent.get('current_A', math.nan):.1f}", pars or "-",
                          ("on bound: " + ", ".join(r.on_bound) + ". ") * bool(r.on_bound)
                          + ("supported" if r.supported else r.reason)))
@@ -853,7 +856,8 @@ def diagnosis_html(d, figs=None) -> str:
         ("Caution", c) for c in d.caveats_]
     return report_page(f"Diagnosis of {record_name_of(d.measurement_.source)}", diagnosis_plain_headline(d), parts,
                        warnings=warnings, terms=("fit", "dbic", "heldout", "cautions", "uncertainty", "sigma"),
-                       values={"min_delta_bic": d.min_delta_bic, "holdout_z": d.holdout_z},
+                       values={"min_delta_bic": d.min_delta_bic, "min_holdout_gain": d.min_holdout_gain,
+                               "holdout_z": d.holdout_z},
                        notes=d.experiment_.notes, settings=diagnosis_dict(d)["settings"],
                        meanings=_DIAGNOSIS_SETTINGS)
 
