@@ -352,3 +352,14 @@ def test_final_refit_reaches_the_structures_optimum_in_the_stick_slip_regime():
     assert final.fit_percent_["current_A"] > best - 0.5
     assert final.cost_ <= min(f["cost"] for f in final.local_fits_)  # the best refit is the one kept
     assert final.n_starts_ > 10 and len(final.local_fits_) >= 2
+
+
+def test_no_weak_evidence_caution_when_the_held_out_gain_is_significant():
+    # truth: the caution says the evidence is weak once autocorrelation is allowed for; a held-out gain of more
+    # than holdout_z standard errors (which allow for it) confirms the effect, whatever the whitened BIC says
+    # (it takes a poor model's misfit for noise: +1544 for the torque law on torque law + compliance)
+    m, _ = make_record((), seed=0, t_end=4.0)
+    d = _selected("torque_friction_law", +1544.0)
+    assert len(d._caveats(m, _exp(), SETUP)) == 1
+    d.rounds_[0][0].holdout_z = d.holdout_z + 0.5
+    assert d._caveats(m, _exp(), SETUP) == []

@@ -356,6 +356,7 @@ class Diagnosis:
         """Greedy rounds of candidates, then the final refit (see :meth:`fit`)."""
         selected: list[str] = []
         rounds = []
+        added: dict = {}  # effect -> the candidate result that added it
         while len(selected) < self.max_effects:
             names = []
             for name in self.candidates:
@@ -395,6 +396,7 @@ class Diagnosis:
                 break
             best = results[0]
             selected.append(best.effect)
+            added[best.effect] = best
             current = best.calibration
             say(f"added {best.effect}")
         # final model on the whole record
@@ -407,6 +409,7 @@ class Diagnosis:
         self.rounds_ = rounds
         self.ranking_ = rounds[0] if rounds else []
         self.selected_ = selected
+        self._added = added
         self.experiment_ = exp
         self.comparison_base_ = compare_run(m, base.run_, exp, model=self.model, params=base.params_)
         fm, fcomps, _, _ = self._structure(params, tuple(selected))
@@ -430,14 +433,24 @@ class Diagnosis:
         """Warnings about selected effects whose evidence is weaker than the criteria suggest."""
         out = []
         span = float(m.t[-1] - exp.t0)
-        for i, name in enumerate(self.selected_):
-            r = next((c for c in self.rounds_[i] if c.effect == name), None)
+        added = getattr(self, "_added", None)
+        if added is None:  # the round each effect was added in, found by its supported result
+            added = {}
+            for rnd in self.rounds_:
+                for c in rnd:
+                    if c.supported and c.effect not in added:
+                        added[c.effect] = c
+        for name in self.selected_:
+            r = added.get(name)
             if r is None:
                 continue
             eff = CATALOGUE[name]
             period = eff.period(params, exp.omega_ref) if eff.period is not None else None
-            out += caution_texts(name, span, period, eff.short_record_note, r.delta_bic_corrected,
-                                 self.min_delta_bic)
+            # weak: neither the BIC with the coloured noise modelled nor a held-out gain of holdout_z standard
+            # errors confirms the plain BIC (the whitened BIC alone misjudges an effect added to a model that
+            # still misses much, e.g. the torque law whose misplaced breakaways it takes for noise)
+            corrected = r.delta_bic_corrected if not r.holdout_z > self.holdout_z else -math.inf
+            out += caution_texts(name, span, period, eff.short_record_note, corrected, self.min_delta_bic)
             for note in eff.plausibility(self.final_calibration_.values_):
                 out.append(f"{name}: {note} (a value outside the usual range is reported, not refused)")
         return out
@@ -624,7 +637,8 @@ class Diagnosis:
         optimum of them than the current model's fit did: its gain is then the current structure's own, and
         the effect's parameters sit at their null value (a second motor of 0.003 kg m^2, a rigid "compliance").
         The current structure is refitted from the candidate's base values; when that lowers its cost by more
-        than :data:`REANCHOR_GAIN`, it becomes the current model and every candidate is judged again against it.
+        than :data:`REANCHOR_GAIN`, it becomes the current model and every candidate is judged again against it
+        (the caller refits the round from it when the re-anchoring alone would count as evidence).
 
         Returns
         -------
@@ -834,11 +848,10 @@ def _schedule(effects, first_failure, new_effect=None, full=False):
     Every effect of the structure contributes, not only the one just added: a structure that holds the
     torque friction law has a rugged cost on a long record (each stick-slip cycle shifts the next) whatever
     else is refitted with it, and the events of a backlash impact or a breakaway must stay aligned in every
-    refit.  ``after_first_failure``: from 1 s after the current model's first failing interval (at least
-    30 % of the record; 30 % when it has none) to the whole record in steps of 10 % (four seconds of a 40 s
-    record: one or two stick-slip cycles), for every refit of such a structure: a cheaper schedule for
-    candidates added on top of a torque-law model (half the record, then all) missed a second motor and a
-    viscous drag that the full schedule found (40 s records, seeds 101 and 102).
+    refit.  ``after_first_failure`` (self-sustained cycles) adds no horizon: such a structure is refitted on
+    the whole record, every local fit beginning with the phase-free stage (``Calibration.fit``,
+    ``cycles=True``; see :func:`_calibrate`).  ``first_failure``, ``new_effect`` and ``full`` are kept for
+    the callers.
 
     Returns
     -------
