@@ -165,10 +165,11 @@ class Burden(Component):
             "a saw-tooth in the current at steady speed: rising while the burden sticks, dropping at each "
             "breakaway, with a period of seconds; the paper's law gives small sliding oscillations",
             notes="an option of the burden model, not a component: no new parameter; mu_c and mu_s are refitted "
-                  "(their meaning changes with the law), first on the record up to the end of the current model's "
-                  "first failing interval, then on all of it: the cost of a long run of stick-slip cycles is rugged. "
-                  "A breakaway misplaced in time costs in proportion to the shift (a cusp at the right friction): "
-                  "each fit runs on a residual smoothed over 0.4 s, then 0.1 s, then none.",
+                  "(their meaning changes with the law) on the whole record, each local fit beginning with a "
+                  "phase-free stage (the cycles' mean level and autocovariance after the ramp): the cost of a long "
+                  "run of stick-slip cycles is rugged, a valley for every whole number of cycles. A breakaway "
+                  "misplaced in time costs in proportion to the shift (a cusp at the right friction): after the "
+                  "stage each fit runs on a residual smoothed over 0.4 s, then 0.1 s, then none.",
             horizons="after_first_failure", separation=0.04, smoothing=(0.4, 0.1)),
     )
     requires = ("kiln",)
