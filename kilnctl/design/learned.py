@@ -4,11 +4,13 @@ The root-locus design of :mod:`kilnctl.design.pid` works on the paper's rigid
 two-inertia model.  A measurement may teach a structure with more dynamics
 (``kilnctl diagnose``).  :func:`check_gains` linearizes that structure exactly
 (:func:`kilnctl.linearize.linearize`, both load conditions) with the given
-gains and lists every closed-loop mode the controller acts on, with its
-damping against the requirement.  :func:`retune` then scales the gains (the
-PID zeros stay where the rigid design put them: the root-locus gain of the
-learned loop) to the value that maximises the least damping, and reports
-what changed and why.
+gains, lists every closed-loop mode the controller acts on and holds the loop
+to every requirement the rigid design was held to (:class:`Requirements`:
+damping ``zeta_min``, dominant natural frequency ``wn_max``, settling time and
+overshoot of the speed after a reference step), in both burden conditions.
+:func:`retune` then searches an overall gain scale and a further factor on
+k_D for the smallest change from the given gains that meets them all, and
+reports what changed and why (or which requirement no setting meets).
 
 A mode the controller cannot move (the sliding burden's pendulum, eq. 25; a
 kinematic angle) is listed apart: no gain changes it, so it does not count
@@ -27,13 +29,17 @@ from ..params import Parameters
 from ..structure import Structure, diagnosis_dict
 from .requirements import Requirements
 
-__all__ = ["LoopCheck", "check_gains", "retune", "Retuned", "learned_structure"]
+__all__ = ["LoopCheck", "check_gains", "retune", "Retuned", "learned_structure", "gain_change"]
 
 #: a damping this close below the requirement still meets it (the root-locus design places poles on the limit)
 ZETA_TOL = 5e-4
 #: sensitivity (relative pole shift per relative gain change) below which the gains barely act on a mode: it
 #: is not counted against the gains (no gain can damp it) but named when lightly damped
 WEAK = 0.01
+#: relative excess of the dominant natural frequency over wn_max still counted as meeting it: the rigid design
+#: places the pole on wn_max by eq. 21, which leaves out the bearing friction's slope the exact linearization
+#: keeps (it moves the stuck-burden pole by up to 0.1 %)
+WN_TOL = 2e-3
 
 
 @dataclass
@@ -51,6 +57,11 @@ class LoopCheck:
     zeta_min : float
         Least damping ratio over the modes the gains act on (sensitivity >= WEAK; -inf when one is unstable).
     requirements : Requirements
+        Resolved (``wn_max`` a number [rad/s]).
+    figures : dict
+        ``{condition: {'dominant_wn': rad/s, 'settling_time': s, 'overshoot': %}}``: the dominant mode (the
+        mode the gains act on nearest the imaginary axis) and the step of the speed ``speed_rpm`` after a
+        step of ``speed_ref`` on the linear model (None: not computed, or unstable).
     """
 
     gains: PIDGains
@@ -58,6 +69,7 @@ class LoopCheck:
     modes: dict
     zeta_min: float
     requirements: Requirements
+    figures: dict = field(default_factory=dict)
 
     @property
     def stable(self) -> bool:
@@ -65,9 +77,44 @@ class LoopCheck:
         return all(r["pole"].real <= 1e-9 for rows in self.modes.values() for r in rows)
 
     @property
-    def ok(self) -> bool:
+    def safe(self) -> bool:
         """True when stable and every moved mode is damped at least ``requirements.zeta_min``."""
         return self.stable and self.zeta_min >= self.requirements.zeta_min - ZETA_TOL
+
+    @property
+    def ok(self) -> bool:
+        """True when every requirement is met in both burden conditions (:meth:`unmet` is empty)."""
+        return not self.unmet()
+
+    def unmet(self) -> list[tuple[str, str, float]]:
+        """The requirements these gains miss on this structure.
+
+        Returns
+        -------
+        list of (str, str, float)
+            ``(requirement name, sentence with the numbers, relative violation [-])``, as
+            :func:`kilnctl.design.analysis.unmet_requirements`; empty when all are met.
+        """
+        req, out = self.requirements, []
+        if not self.stable:
+            return [("stability", "closed loop unstable on this structure", 1e3)]
+        if self.zeta_min < req.zeta_min - ZETA_TOL:
+            cond, r = self.weakest()
+            out.append(("zeta_min", f"damping ratio {r['zeta']:.3f} < zeta_min = {req.zeta_min:g} ({cond})",
+                        (req.zeta_min - r["zeta"]) / max(req.zeta_min, 1e-3)))
+        for cond, f in self.figures.items():
+            wn, ts, os_ = f.get("dominant_wn"), f.get("settling_time"), f.get("overshoot")
+            if wn is not None and req.wn_max is not None and wn > req.wn_max * (1 + WN_TOL):
+                out.append(("wn_max", f"dominant natural frequency {wn:.3f} rad/s > wn_max = {req.wn_max:.3f} "
+                            f"rad/s ({cond})", (wn - req.wn_max) / req.wn_max))
+            if ts is not None and ts > req.settling_time_max * (1 + 1e-6):
+                out.append(("settling_time_max", f"settling time {ts:.3f} s > settling_time_max = "
+                            f"{req.settling_time_max:g} s ({cond})",
+                            (ts - req.settling_time_max) / req.settling_time_max))
+            if os_ is not None and os_ > req.overshoot_max + 1e-6:
+                out.append(("overshoot_max", f"overshoot {os_:.3f} % > overshoot_max = {req.overshoot_max:g} % "
+                            f"({cond})", (os_ - req.overshoot_max) / max(req.overshoot_max, 1.0)))
+        return out
 
     def weakest(self) -> tuple[str, dict] | None:
         """The condition and row of the least damped mode the gains move."""
@@ -89,12 +136,15 @@ class LoopCheck:
             if not self.stable:
                 text = (f"UNSAFE: the loop is UNSTABLE on this structure ({what}, burden {cond}, has a positive real "
                         "part): do not use these gains on this kiln")
-            elif not self.ok:
+            elif not self.safe:
                 text = (f"UNSAFE: {what} (burden {cond}) is damped only zeta = {r['zeta']:.3f}, below the required "
                         f"{self.requirements.zeta_min:.2f}: these gains will excite it")
             else:
                 text = (f"safe: every mode the gains act on is damped at least zeta = {self.zeta_min:.3f} ({what}, "
                         f"burden {cond})")
+                other = [s for name, s, _ in self.unmet() if name != "zeta_min"]
+                text += (f"; but it misses: {'; '.join(other)}" if other else
+                         "; every requirement met in both burden conditions" if self.figures else "")
         for cond, rows in self.modes.items():
             for r in rows:
                 if (not r["moved"] and r["f_hz"] > 0.05 and r["zeta"] < self.requirements.zeta_min
@@ -117,6 +167,12 @@ class LoopCheck:
                 kind = "" if r["moved"] else "   (not moved by the gains)"
                 lines.append(f"    omega_n {r['omega_n_rad_s']:8.3f} rad/s  f {r['f_hz']:6.3f} Hz  "
                              f"zeta {r['zeta'] + 0.0:7.3f}{kind}")
+            f = self.figures.get(cond)
+            if f and f.get("settling_time") is not None:
+                lines.append(f"    dominant omega_n {f['dominant_wn']:.3f} rad/s (<= {self.requirements.wn_max:.3f}), "
+                             f"speed step: settling {f['settling_time']:.3f} s (<= "
+                             f"{self.requirements.settling_time_max:g}), overshoot {f['overshoot']:.2f} % (<= "
+                             f"{self.requirements.overshoot_max:g})")
         lines.append("  " + self.verdict())
         return "\n".join(lines)
 
@@ -127,7 +183,9 @@ class LoopCheck:
                 v if not isinstance(v, (float, np.floating)) else None)
 
         return {"gains": self.gains.as_dict(), "components": list(self.components), "stable": self.stable,
-                "ok": self.ok, "zeta_min": num(self.zeta_min), "verdict": self.verdict(),
+                "ok": self.ok, "safe": self.safe, "zeta_min": num(self.zeta_min), "verdict": self.verdict(),
+                "unmet": [s for _, s, _ in self.unmet()],
+                "figures": {c: {k: num(v) for k, v in f.items()} for c, f in self.figures.items()},
                 "modes": {c: [{**{k: num(v) for k, v in r.items() if k != "pole"}, "re": float(r["pole"].real),
                                "im": float(r["pole"].imag)} for r in rows if r["omega_n_rad_s"] > 0]
                           for c, rows in self.modes.items()}}
@@ -150,7 +208,7 @@ def _rows(lin_a, lin_b, exclude=None):
 
 def check_gains(params: Parameters, components, gains: PIDGains | None = None,
                 requirements: Requirements | None = None, conditions=("stick", "slip")) -> LoopCheck:
-    """Closed-loop modes of a structure with the given gains, both load conditions.
+    """Closed-loop modes of a structure with the given gains, both load conditions, against every requirement.
 
     Parameters
     ----------
@@ -162,7 +220,7 @@ def check_gains(params: Parameters, components, gains: PIDGains | None = None,
     gains : PIDGains, optional
         Gains to check (default: those of ``params`` after design resolution).
     requirements : Requirements, optional
-        Requirements (default: :class:`Requirements` defaults).
+        Requirements (default: :class:`Requirements` defaults; ``wn_max`` resolved from ``params``).
     conditions : sequence of {'stick', 'slip'}
         Burden conditions to linearize in.
 
@@ -171,8 +229,9 @@ def check_gains(params: Parameters, components, gains: PIDGains | None = None,
     LoopCheck
     """
     params = resolve_gains(params)
+    req = (Requirements() if requirements is None else requirements).resolve(params)
     bases = _linearized(params, components, conditions)
-    return _check(bases, PIDGains(params.k_p, params.k_I, params.k_D) if gains is None else gains, requirements)
+    return _check(bases, PIDGains(params.k_p, params.k_I, params.k_D) if gains is None else gains, req, step=True)
 
 
 def _linearized(params, components, conditions=("stick", "slip")):
@@ -182,12 +241,36 @@ def _linearized(params, components, conditions=("stick", "slip")):
     return {c: linearize(params, components=components, burden=c) for c in conditions}
 
 
-def _check(bases, gains, requirements=None, exclude=None) -> LoopCheck:
+def _step_figures(lin, rows) -> dict:
+    """Dominant natural frequency [rad/s], settling time [s] and overshoot [%] of ``speed_rpm`` after a step of
+    ``speed_ref`` on one linearized closed loop (the same step information as :func:`analysis.analyse`)."""
+    import control as ct
+
+    from .analysis import step_samples
+
+    moved = [r for r in rows if r["moved"] and r["omega_n_rad_s"] > 0]
+    if not moved or any(r["pole"].real > 1e-9 for r in moved):
+        return {"dominant_wn": None, "settling_time": None, "overshoot": None}
+    dom = max(moved, key=lambda r: r["pole"].real)
+    slowest = -dom["pole"].real
+    fastest = max(r["omega_n_rad_s"] for r in moved)
+    t_final = 8.0 / slowest
+    t = np.linspace(0.0, t_final, int(min(20_000, max(3000, 20 * t_final * fastest))))
+    y = step_samples(lin.sys[list(lin.sys.output_labels).index("speed_rpm"), 0], t)
+    info = ct.step_info(y, timepts=t)
+    return {"dominant_wn": float(dom["omega_n_rad_s"]), "settling_time": float(info["SettlingTime"]),
+            "overshoot": float(info["Overshoot"])}
+
+
+def _check(bases, gains, requirements=None, exclude=None, step=False) -> LoopCheck:
     """check_gains on structures already linearized (``bases``: condition -> LinearizedPlant); with
-    ``exclude`` (condition -> natural frequencies [rad/s]) only modes near those may count as not moved."""
+    ``exclude`` (condition -> natural frequencies [rad/s]) only modes near those may count as not moved; with
+    ``step`` the step of the speed too (settling time, overshoot), else only the poles."""
     req = Requirements() if requirements is None else requirements
+    if req.wn_max is None:
+        req = req.resolve(next(iter(bases.values())).params)
     bumped = gains.scaled(1.01)
-    modes = {}
+    modes, figures = {}, {}
     zmin = np.inf
     for cond, base in bases.items():
         la = base.with_gains(gains.k_p, gains.k_I, gains.k_D)
@@ -197,7 +280,42 @@ def _check(bases, gains, requirements=None, exclude=None) -> LoopCheck:
         for r in rows:
             if r["moved"] and r["omega_n_rad_s"] > 0:
                 zmin = min(zmin, r["zeta"] if r["pole"].real <= 1e-9 else -np.inf)
-    return LoopCheck(gains, tuple(next(iter(bases.values())).components), modes, float(zmin), req)
+        if step:
+            figures[cond] = _step_figures(la, rows)
+        else:
+            moved = [r for r in rows if r["moved"] and r["omega_n_rad_s"] > 0]
+            figures[cond] = {"dominant_wn": (max(moved, key=lambda r: r["pole"].real)["omega_n_rad_s"]
+                                             if moved else None)}
+    return LoopCheck(gains, tuple(next(iter(bases.values())).components), modes, float(zmin), req, figures)
+
+
+#: gain scales (all three gains) and further k_D factors of the coarse search of :func:`retune` [-]
+KAPPAS = np.unique(np.concatenate([np.geomspace(0.05, 2.0, 41), [1.0]]))
+KD_FACTORS = np.unique(np.concatenate([np.geomspace(0.1, 5.0, 15), [1.0]]))
+
+
+def gain_change(kappa: float, kd_factor: float) -> float:
+    """Size of a change of the gains: the root sum of squares of the log ratios of k_p, k_I and k_D [-].
+
+    Parameters
+    ----------
+    kappa : float
+        Factor on all three gains [-].
+    kd_factor : float
+        Further factor on k_D [-].
+
+    Returns
+    -------
+    float
+        ``sqrt(2 ln(kappa)^2 + ln(kappa kd_factor)^2)``: 0 for the given gains; about the relative change
+        for small ones.
+    """
+    return float(np.sqrt(2 * np.log(kappa) ** 2 + np.log(kappa * kd_factor) ** 2))
+
+
+def _violation(check: LoopCheck) -> float:
+    """Sum of the relative violations of the requirements [-] (0: all met)."""
+    return float(sum(v for _, _, v in check.unmet()))
 
 
 @dataclass
@@ -213,10 +331,10 @@ class Retuned:
     kd_factor : float
         Further factor on k_D (1: the PID zeros stay where the rigid design put them).
     scan : list of tuple
-        (kappa, kd_factor, least damping) of every pair tried.
+        (kappa, kd_factor, least damping [-], largest dominant natural frequency [rad/s]) of every pair tried.
     best_found : tuple or None
-        When no setting meets the requirement: the best damped (kappa, kd_factor, zeta); the gains are
-        then not changed (``after is before``).
+        When no setting meets every requirement: ``(kappa, kd_factor, LoopCheck)`` of the closest one (the
+        least summed relative violation); the gains are then not changed (``after is before``).
     """
 
     before: LoopCheck
@@ -233,37 +351,45 @@ class Retuned:
         why = ""
         if w is not None:
             cond, r = w
-            why = (f" The limiting mode is {'the %.2f Hz pair' % r['f_hz'] if r['f_hz'] > 0 else 'a real pole'} "
+            why = (f" The least damped mode is {'the %.2f Hz pair' % r['f_hz'] if r['f_hz'] > 0 else 'a real pole'} "
                    f"with the burden {cond}.")
+        missed = "; ".join(s for _, s, _ in b.unmet())
+        rng = (f"no setting with the gains x {KAPPAS[0]:g} to {KAPPAS[-1]:g} and k_D x {KD_FACTORS[0]:g} to "
+               f"{KD_FACTORS[-1]:g} meets every requirement")
         if a is b and self.best_found is None:
-            return ("On the learned structure the rigid design's gains meet the requirements: kept. "
-                    + b.verdict() + "\n\n" + b.summary())
+            return ("On the learned structure the rigid design's gains meet every requirement in both burden "
+                    "conditions: kept. " + b.verdict() + "\n\n" + b.summary())
         if a is b:
-            k, d, z = self.best_found
-            return (f"On the learned structure the rigid design's gains give least damping zeta = {b.zeta_min:.3f}, "
-                    f"below the required {b.requirements.zeta_min:.2f}, and no slower setting with k_D from 0.1 to 5 "
-                    f"times meets it (the best, gains x {k:.3g} and k_D x {d:.3g}, gives zeta = {z:.3f}): gains NOT "
-                    "changed. Loosen the requirement, remove the effect at its source (a faster speed sensor, a "
-                    "stiffer coupling), or add a filter to the loop.\n\n" + b.summary())
+            k, d, best = self.best_found
+            return (f"On the learned structure the rigid design's gains miss: {missed}. {rng[0].upper() + rng[1:]}: the "
+                    f"closest, gains x {k:.3g} and k_D x {d:.3g}, still misses: "
+                    + "; ".join(s for _, s, _ in best.unmet()) + ". Gains NOT changed. Loosen the requirement, "
+                    "remove the effect at its source (a faster speed sensor, a stiffer coupling), or add a filter "
+                    "to the loop.\n\n" + b.summary() + "\n\nclosest setting:\n" + best.summary())
         head = (f"On the learned structure the rigid design's gains give least damping zeta = {b.zeta_min:.3f} "
-                f"({'meets' if b.ok else 'MISSES'} the required {b.requirements.zeta_min:.2f}).{why} "
-                f"Gains x {self.kappa:.3g}" + (f" and k_D x {self.kd_factor:.3g}" if self.kd_factor != 1 else
-                                               " (zeros kept)")
-                + f": {a.gains}, least damping zeta = {a.zeta_min:.3f}"
-                + ("" if a.ok else f", still below {a.requirements.zeta_min:.2f}: no slower setting with k_D from "
-                   "0.1 to 5 times meets the requirement on this structure; loosen it, or remove the effect at its "
-                   "source (a faster sensor, a stiffer coupling) or add a filter") + ".")
+                f"({'meets' if b.safe else 'MISSES'} the required {b.requirements.zeta_min:.2f}).{why}"
+                + (f" They miss: {missed}." if missed else "")
+                + f" Gains x {self.kappa:.3g}" + (f" and k_D x {self.kd_factor:.3g}" if self.kd_factor != 1 else
+                                                  " (zeros kept)")
+                + f" (the smallest change found that meets every requirement): {a.gains}, least damping zeta = "
+                f"{a.zeta_min:.3f}, dominant omega_n "
+                + " and ".join(f"{f['dominant_wn']:.2f} rad/s ({c})" for c, f in a.figures.items())
+                + f" (<= {a.requirements.wn_max:.2f}).")
         return head + "\n\nbefore:\n" + b.summary() + "\n\nafter:\n" + a.summary()
 
     def to_dict(self) -> dict:
         """JSON-ready form."""
-        return {"kappa": self.kappa, "kd_factor": self.kd_factor, "before": self.before.to_dict(),
-                "after": self.after.to_dict(), "scan": [list(x) for x in self.scan]}
+        out = {"kappa": self.kappa, "kd_factor": self.kd_factor, "before": self.before.to_dict(),
+               "after": self.after.to_dict(), "scan": [list(x) for x in self.scan]}
+        if self.best_found is not None:
+            k, d, c = self.best_found
+            out["best_found"] = {"kappa": k, "kd_factor": d, **c.to_dict()}
+        return out
 
 
 def retune(params: Parameters, components, gains: PIDGains | None = None,
            requirements: Requirements | None = None, kappas=None) -> Retuned:
-    """Slow the gains down (and move k_D) until the learned structure meets the damping requirement.
+    """Change the gains as little as possible until the learned structure meets every requirement.
 
     Parameters
     ----------
@@ -274,13 +400,11 @@ def retune(params: Parameters, components, gains: PIDGains | None = None,
     gains : PIDGains, optional
         Starting gains (default: the rigid root-locus design for ``params``).
     requirements : Requirements, optional
+        The requirements the rigid design was held to (default: :class:`Requirements` defaults; ``wn_max``
+        resolved from ``params``).
     kappas : sequence of float, optional
-        Scales of all three gains to try (default: 31 values from 0.05 to 1,
-        log spaced), each with k_D scaled further by 15 factors from 0.1 to
-        5.  The rigid design is the fastest the requirements allow
-        (natural-frequency cap, settling time), so the gains are only slowed
-        down: the largest scale (then the k_D factor closest to 1) that meets
-        ``zeta_min``, else the best damped.
+        Scales of all three gains to try (default :data:`KAPPAS`: 0.05 to 2, log spaced, and 1), each with
+        k_D scaled further by :data:`KD_FACTORS` (0.1 to 5, and 1).
 
     Returns
     -------
@@ -293,41 +417,60 @@ def retune(params: Parameters, components, gains: PIDGains | None = None,
 
     Notes
     -----
-    When no setting meets the requirement the gains are kept (``after is
-    before``) and ``best_found`` says what the best setting would give.
+    Two parameters: the scale keeps the PID zeros and moves the poles along the root locus of the learned
+    loop (speed, ``wn_max``, settling); the k_D factor moves the zeros (damping). Every pair of the grid is
+    checked on the poles (``zeta_min``, ``wn_max``, both burden conditions); the grid is refined around the
+    smallest change (:func:`gain_change`) that meets them, and the candidates are then checked in order of
+    change on the speed step too (settling time, overshoot) until one meets every requirement. When none
+    does, the gains are kept (``after is before``) and ``best_found`` gives the closest setting and what it
+    still misses.
     """
     params = resolve_gains(params)
     gains = PIDGains(params.k_p, params.k_I, params.k_D) if gains is None else gains
-    req = Requirements() if requirements is None else requirements
+    req = (Requirements() if requirements is None else requirements).resolve(params)
     bases = _linearized(params, components)
-    before = _check(bases, gains, req)
+    before = _check(bases, gains, req, step=True)
     # modes the reference gains barely act on (a drive-train resonance, the burden's pendulum) stay out of the
     # objective for every candidate: no gain damps them, and a loop mode must not drop out because slower
     # gains act on it less
     exclude = {c: [r["omega_n_rad_s"] for r in rows if not r["moved"]] for c, rows in before.modes.items()}
     if before.ok:
         return Retuned(before, before, 1.0, 1.0, [])
-    ks = np.geomspace(0.05, 1.0, 31) if kappas is None else np.asarray(kappas, float)
-    ds = np.unique(np.concatenate([np.geomspace(0.1, 5.0, 15), [1.0]]))
-    scan = []
+    ks = KAPPAS if kappas is None else np.asarray(kappas, float)
+    checks = {}
+
+    def pole_check(k, d):
+        key = (round(float(k), 12), round(float(d), 12))
+        if key not in checks:
+            checks[key] = _check(bases, PIDGains(k * gains.k_p, k * gains.k_I, k * d * gains.k_D), req, exclude)
+        return checks[key]
+
     for k in ks:
-        for d in ds:
-            g = PIDGains(k * gains.k_p, k * gains.k_I, k * d * gains.k_D)
-            scan.append((float(k), float(d), _check(bases, g, req, exclude).zeta_min))
-    # the rigid design is the fastest the requirements allow (omega_n cap, settling): on the learned structure
-    # the gains are only ever slowed down; k_D may go either way. Among the settings that meet zeta_min: the
-    # largest scale, then the k_D factor closest to 1; else the best damped
-    meeting = [x for x in scan if x[2] >= req.zeta_min - ZETA_TOL]
-    best = (max(meeting, key=lambda x: (round(x[0], 9), -abs(np.log(x[1])))) if meeting
-            else max(scan, key=lambda x: x[2]))
-    if not np.isfinite(best[2]) or best[2] < 0:
+        for d in KD_FACTORS:
+            pole_check(k, d)
+    feasible = sorted((key for key, c in checks.items() if c.ok), key=lambda key: gain_change(*key))
+    if feasible:  # refine around the smallest change: one coarse step each way, 9 x 9
+        k0, d0 = feasible[0]
+        sk = np.log(ks[1] / ks[0]) if len(ks) > 1 else 0.1
+        sd = np.log(KD_FACTORS[1] / KD_FACTORS[0])
+        for k in k0 * np.exp(np.linspace(-sk, sk, 9)):
+            for d in d0 * np.exp(np.linspace(-sd, sd, 9)):
+                pole_check(k, d)
+        feasible = sorted((key for key, c in checks.items() if c.ok), key=lambda key: gain_change(*key))
+    scan = [(k, d, c.zeta_min, max((f["dominant_wn"] or 0.0) for f in c.figures.values()))
+            for (k, d), c in checks.items()]
+    for k, d in feasible[:40]:  # the step of the speed too, smallest change first
+        full = _check(bases, PIDGains(k * gains.k_p, k * gains.k_I, k * d * gains.k_D), req, exclude, step=True)
+        if full.ok:
+            return Retuned(before, full, float(k), float(d), scan)
+    stable = [key for key, c in checks.items() if c.stable and np.isfinite(c.zeta_min) and c.zeta_min >= 0]
+    if not stable:
         raise DesignError("no scale of the gains gives a stable loop on this structure "
                           f"({'+'.join(before.components)}); the PID structure itself has to change")
-    if not meeting:  # nothing meets the requirement: keep the rigid design, and say what the best would give
-        return Retuned(before, before, 1.0, 1.0, scan, best_found=best)
-    new = PIDGains(best[0] * gains.k_p, best[0] * gains.k_I, best[0] * best[1] * gains.k_D)
-    after = _check(bases, new, req, exclude)
-    return Retuned(before, after, best[0], best[1], scan)
+    # nothing meets every requirement: keep the rigid design, and say what the closest setting still misses
+    k, d = min(stable, key=lambda key: (_violation(checks[key]), gain_change(*key)))
+    best = _check(bases, PIDGains(k * gains.k_p, k * gains.k_I, k * d * gains.k_D), req, exclude, step=True)
+    return Retuned(before, before, 1.0, 1.0, scan, best_found=(float(k), float(d), best))
 
 
 def learned_structure(path, model: str | None = None, base: Parameters | None = None):
