@@ -39,7 +39,7 @@ import numpy as np
 from ..errors import KilnctlError, ModelError, NotFittedError, close_matches_hint
 from ..params import Parameters
 from ..simulate import resolve_gains
-from .calibrate import Calibration, Smoothing, holdout_masks
+from .calibrate import Calibration, Smoothing, default_starts, holdout_masks
 from .compare import Comparison, compare_run
 from .effects import CATALOGUE, DEFAULT_CALIBRATE, effect_components, grid_starts
 from .io import Measurement
@@ -236,6 +236,18 @@ class Diagnosis:
         self.workers = workers
 
     # --- structure of a model: base model + effects ------------------------------------
+    def _cyclic(self, effects) -> tuple:
+        """The effects that set the refit schedule: ``effects``, plus the torque friction law when the setup
+        already states it (``friction_law = 'torque'``): its stick-slip cycles make the cost as rugged as
+        when the diagnosis adds the law, so the base and every candidate get the same handling."""
+        if self.params.friction_law == "torque" and "torque_friction_law" not in effects:
+            return tuple(effects) + ("torque_friction_law",)
+        return tuple(effects)
+
+    def _rugged(self, effects) -> bool:
+        """True when the structure has self-sustained stick-slip cycles (see :meth:`_cyclic`)."""
+        return any(CATALOGUE[e].horizons == "after_first_failure" for e in self._cyclic(effects))
+
     def _structure(self, params, effects):
         """(model, components, params with options, free parameters) of base + effects."""
         model = self.model
@@ -252,10 +264,10 @@ class Diagnosis:
                    first_failure=None, new_effect=None, n_local=None, full_schedule=False) -> Calibration:
         model, comps, p, free = self._structure(params, effects)
         cal = Calibration(p, free, model=model, effects=comps, scales=scales, t0=self.t0, max_nfev=self.max_nfev)
-        horizons, smoothing, sep = _schedule(effects, first_failure, new_effect, full_schedule)
+        horizons, smoothing, sep = _schedule(self._cyclic(effects), first_failure, new_effect, full_schedule)
         if n_local is None:
             n_local = self.n_local if new_effect else 1
-        rugged = any(CATALOGUE[e].horizons == "after_first_failure" for e in effects)
+        rugged = self._rugged(effects)
         return cal.fit(m, mask=mask, init=init, starts=list(starts), experiment=experiment, horizons=horizons,
                        n_local=n_local, separation=sep, smoothing=smoothing, cycles=rugged)
 
@@ -277,7 +289,7 @@ class Diagnosis:
             spread = [{"mu_c": f * mu_c, "mu_s": f * mu_c * r} for f in (0.8, 1.0, 1.25)
                       for r in np.geomspace(1.02, 2.2, 6)]
         ff = self._first_failure(m, current, exp)
-        rugged = any(CATALOGUE[e].horizons == "after_first_failure" for e in selected)
+        rugged = self._rugged(selected)
         if rugged:
             # stick-slip: one search over both starting points and the spread, four local fits (the setting
             # that reached the true structure's optimum on torque law + second motor records, seeds 101-103)
@@ -332,8 +344,14 @@ class Diagnosis:
         # 1. baseline: the base model calibrated on the whole record
         # (a grid over the friction regimes and several local fits: a base stuck in a poor valley would make
         # every candidate that escapes it look like evidence)
-        base = Calibration(params, self.calibrate, model=self.model, t0=self.t0,
-                           max_nfev=self.max_nfev).fit(m, experiment=exp, n_local=self.n_local + 1)
+        base_cal = Calibration(params, self.calibrate, model=self.model, t0=self.t0, max_nfev=self.max_nfev)
+        if self._rugged(()) and {"mu_c", "mu_s"} <= set(self.calibrate):
+            # the setup states the torque law: stick-slip cycles from the start, fitted as when it is added
+            base = base_cal.fit(m, experiment=exp, n_local=self.n_local + 1, cycles=True,
+                                starts=default_starts(self.calibrate, {k: float(params[k]) for k in self.calibrate})
+                                + _torque_law_starts(params.mu_c))
+        else:
+            base = base_cal.fit(m, experiment=exp, n_local=self.n_local + 1)
         say(f"baseline: {_fmt_fit(base.fit_percent_)} ({base.nfev_} runs)")
         # residual scales for the comparison of structures: the base's residual RMS per channel
         # (each channel weighted by its own error level, as the BIC's likelihood does)
@@ -474,16 +492,12 @@ class Diagnosis:
         # since output-error costs of impacts and stick-slip cycles have many local minima
         effect_starts = grid_starts(eff.parameters, eff.grid_points) + list(eff.starts(p, m)) + eff.usual_starts()
         if name == "torque_friction_law":
-            # the law changes what mu_s means.  The first breakaway (set by mu_s alone) is sharp, so the cost
-            # has a narrow valley along mu_s = const: a fine grid in mu_s, a coarse one in mu_c
-            mu_c = init.get("mu_c", p.mu_c)
-            effect_starts = [{"mu_c": f * mu_c, "mu_s": f * mu_c * r} for f in (0.9, 1.0, 1.1)
-                             for r in np.geomspace(1.02, 2.2, 30)]
+            effect_starts = _torque_law_starts(init.get("mu_c", p.mu_c))
         # the base values from the current model and from the setup: the current model's calibration may sit
         # in a regime (e.g. of the burden friction) that only made up for the missing effect
         setup_base = {k: float(params[k]) for k in self.calibrate if k in init}
         n_local = None
-        rugged = any(CATALOGUE[e].horizons == "after_first_failure" for e in effects)
+        rugged = self._rugged(effects)
         if rugged:
             # stick-slip in the structure: the cost is rugged, one more local fit and no warm-start shortcut
             n_local = self.n_local + 1
@@ -840,6 +854,15 @@ def _search_summary(cal: Calibration) -> dict:
     return {"n_starts": int(getattr(cal, "n_starts_", 1)), "n_local_fits": len(fits),
             "costs": [float(c) for c in costs], "fit_current_percent": sorted((float(c) for c in cur), reverse=True),
             "kept_cost": float(cal.cost_)}
+
+
+def _torque_law_starts(mu_c: float) -> list[dict]:
+    """Starting points of (mu_c, mu_s) under the torque friction law.
+
+    The law changes what mu_s means.  The first breakaway (set by mu_s alone) is sharp, so the cost has a
+    narrow valley along mu_s = const: a fine grid in mu_s/mu_c (1.02 to 2.2, geometric), a coarse one in mu_c.
+    """
+    return [{"mu_c": f * mu_c, "mu_s": f * mu_c * r} for f in (0.9, 1.0, 1.1) for r in np.geomspace(1.02, 2.2, 30)]
 
 
 def _schedule(effects, first_failure, new_effect=None, full=False):
