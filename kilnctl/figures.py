@@ -12,6 +12,7 @@ caption under the axes that explains lines and shading a legend cannot.
 from __future__ import annotations
 
 import textwrap
+from abc import ABC, abstractmethod
 from pathlib import Path
 
 from .errors import KilnctlError
@@ -40,7 +41,7 @@ COLORS = {
 FONT = {"suptitle": 11, "title": 9.5, "label": 9.5, "legend": 8, "note": 8.5, "caption": 8.5}
 
 
-class Plotted:
+class Plotted(ABC):
     """Base of the result objects that draw one standard figure.
 
     :meth:`plot` makes the figure, or takes the caller's, and a subclass's
@@ -69,8 +70,9 @@ class Plotted:
             fig = plt.figure(figsize=self.figsize)
         return self._draw(fig)
 
-    def _draw(self, fig):  # pragma: no cover - every subclass defines it
-        raise NotImplementedError(f"{type(self).__name__} does not define _draw(fig)")
+    @abstractmethod
+    def _draw(self, fig):
+        """Draw the panels into ``fig`` and return it (each subclass defines its figure)."""
 
 
 def record_name(source) -> str:

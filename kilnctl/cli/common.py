@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import inspect
 import os
+from abc import ABC, abstractmethod
 import sys
 from pathlib import Path
 
@@ -33,7 +34,7 @@ SHARED_OPTIONS = {
 }
 
 
-class Command:
+class Command(ABC):
     """A ``kilnctl`` subcommand; the docstring of a subclass is the description its ``--help`` shows.
 
     A subclass sets :attr:`name` and :attr:`help`, adds its options in :meth:`add_arguments` and
@@ -75,6 +76,7 @@ class Command:
             The subcommand's parser.
         """
 
+    @abstractmethod
     def run(self, args) -> int:
         """Do the subcommand's work and print or write its result; return the exit code.
 
@@ -88,7 +90,6 @@ class Command:
         int
             0 on success (a subcommand's module docstring names any other code).
         """
-        raise NotImplementedError(f"kilnctl {self.name}: no run()")
 
 
 def add_options(parser, **options) -> None:
