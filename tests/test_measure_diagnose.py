@@ -363,3 +363,65 @@ def test_no_weak_evidence_caution_when_the_held_out_gain_is_significant():
     assert len(d._caveats(m, _exp(), SETUP)) == 1
     d.rounds_[0][0].holdout_z = d.holdout_z + 0.5
     assert d._caveats(m, _exp(), SETUP) == []
+
+
+def test_a_breakaway_a_few_milliseconds_off_is_timing_not_a_failure():
+    """Truth by construction: a measured current that steps at t = 2.000 s and a model that steps at 2.010 s
+    differ by the whole step on the samples in between, yet the model has the event; a pulse the model lacks
+    altogether is a failure whatever the shift."""
+    import numpy as np
+
+    from kilnctl.measure.diagnose import EVENT_TIMING_S, _timing_only
+
+    t = np.arange(0.0, 4.0, 0.005)
+    measured = np.where(t >= 2.0, 800.0, 600.0)
+    model = np.where(t >= 2.01, 800.0, 600.0)
+    where = np.abs(measured - model) > 50.0
+    assert where.sum() == 2  # two samples 200 A apart
+    assert _timing_only(t, measured, model, where, limit=30.0)
+    late = np.where(t >= 2.0 + 3 * EVENT_TIMING_S, 800.0, 600.0)  # 60 ms late: beyond the tolerance
+    assert not _timing_only(t, measured, late, np.abs(measured - late) > 50.0, limit=30.0)
+    pulse = measured + np.where((t >= 3.0) & (t < 3.05), 200.0, 0.0)
+    assert not _timing_only(t, pulse, measured, np.abs(pulse - measured) > 50.0, limit=30.0)
+
+
+def test_fit_points_of_an_interval_equal_the_fit_gained_by_removing_it():
+    """Truth: fit % computed from its definition (kilnctl.measure.stats.fit_percent) with and without the
+    interval's residual."""
+    import numpy as np
+
+    from kilnctl.measure.diagnose import fit_points
+    from kilnctl.measure.stats import fit_percent
+
+    rng = np.random.default_rng(4)
+    t = np.linspace(0.0, 10.0, 1001)
+    y = 500.0 * np.minimum(t / 7.0, 1.0)
+    model = y - rng.normal(0.0, 0.5, t.size)
+    where = (t > 4.0) & (t < 6.0)
+    model[where] -= 3.0
+    e = y - model
+    repaired = np.where(where, y, model)
+    expected = fit_percent(y, repaired) - fit_percent(y, model)
+    assert fit_points(y, e, where) == pytest.approx(expected, rel=1e-9)
+    assert fit_points(y, e, np.zeros(t.size, bool)) == 0.0
+
+
+@pytest.mark.slow  # two refits of a two-effect structure on top of the shared diagnosis
+def test_backward_check_removes_an_effect_the_plant_does_not_have(second_motor_case):
+    """Truth: the plant that made the record has a second motor and no viscous drag.  A selection of both
+    (as a greedy search could end with, the drag added first) loses the drag in the backward check, and
+    the second motor stays."""
+    from kilnctl.simulate import resolve_gains
+
+    m, truth, d = second_motor_case
+    params = resolve_gains(d.params)
+    exp = d.experiment_
+    init = dict(d.final_calibration_.values_, B_o=2e5)
+    both = d._calibrate(m, params, ("viscous_drag", "second_motor"), d.scales_, d.train_, init,
+                        [dict(init, B_o=b) for b in (1e4, 1e6)], experiment=exp, n_local=2)
+    selected, current, removed = d._backward(m, params, ["viscous_drag", "second_motor"], both, {}, d.scales_,
+                                             d.train_, d.test_, exp, None, lambda s: None)
+    assert selected == ["second_motor"]
+    assert [r.effect for r in removed] == ["viscous_drag"]
+    assert "backward check" in removed[0].reason
+    assert "J_m2" in current.values_ and "B_o" not in current.values_
