@@ -378,7 +378,9 @@ class Diagnosis:
         base_cal = Calibration(params, self.calibrate, model=self.model, t0=self.t0, max_nfev=self.max_nfev)
         if self._rugged(()) and {"mu_c", "mu_s"} <= set(self.calibrate):
             # the setup states the torque law: stick-slip cycles from the start, fitted as when it is added
-            base = base_cal.fit(m, experiment=exp, n_local=self.n_local + 1, cycles=True,
+            # (phase-free stage, and the law's smoothing widths: a breakaway a sample off is a cusp of the cost)
+            _, smoothing, _ = _schedule(self._cyclic(()), None)
+            base = base_cal.fit(m, experiment=exp, n_local=self.n_local + 1, cycles=True, smoothing=smoothing,
                                 starts=default_starts(self.calibrate, {k: float(params[k]) for k in self.calibrate})
                                 + _torque_law_starts(params.mu_c))
         else:
