@@ -425,3 +425,28 @@ def test_backward_check_removes_an_effect_the_plant_does_not_have(second_motor_c
     assert [r.effect for r in removed] == ["viscous_drag"]
     assert "backward check" in removed[0].reason
     assert "J_m2" in current.values_ and "B_o" not in current.values_
+
+
+def test_a_current_offset_at_standstill_is_reported_and_a_clean_record_says_nothing():
+    """Truth by construction: 2 s at rest (white noise of 4 A on the current) put before a synthetic start-up,
+    once with +25 A added to every current sample (a sensor offset) and once without."""
+    import numpy as np
+
+    from kilnctl.measure.diagnose import standstill_offsets
+    from kilnctl.measure.io import Measurement
+
+    m, _ = make_record((), seed=1, t_end=12.0)
+    rng = np.random.default_rng(7)
+    t_rest = np.arange(-2.0, 0.0, 0.02)
+    found = {}
+    for offset in (0.0, 25.0):
+        cur = np.concatenate([rng.normal(0.0, 4.0, t_rest.size), m.current]) + offset
+        spd = np.concatenate([rng.normal(0.0, 0.3, t_rest.size), m.speed])
+        ref = np.concatenate([np.zeros(t_rest.size), m.speed_ref])
+        rec = Measurement.from_arrays(np.concatenate([t_rest, m.t]) + 2.0, cur, spd, ref)
+        found[offset] = standstill_offsets(rec, rec.experiment(SETUP))
+    assert found[0.0] == []
+    (only,) = found[25.0]
+    assert only["channel"] == "current_A"
+    assert only["offset"] == pytest.approx(25.0, abs=2.0)  # 100 samples of 4 A noise: standard error 0.4 A
+    assert f"{only['offset']:+.3g} A at standstill" in only["text"] and "sensor offset" in only["text"]

@@ -206,6 +206,9 @@ class Diagnosis:
         Residual scale per channel that weights the structures' comparison [unit of the channel].
     train_, test_ : ndarray of bool
         The fitting and the held-out samples of the record.
+    standstill_ : list of dict
+        Sensor offsets seen while the drive stands still before the start-up (see
+        :func:`standstill_offsets`); each is also a caution and part of ``unexplained_``.
     removed_ : list of CandidateResult
         Effects the greedy search added and the backward check removed (see :meth:`_backward`), with why.
     final_search_ : dict
@@ -486,6 +489,14 @@ class Diagnosis:
                                      abrupt_change={k: v for k, v in self.abrupt_.items() if k != "text"},
                                      text=f"{self.abrupt_['text']}. {self.signature_['text']}")
         self.caveats_ = self._caveats(m, exp, params)
+        self.standstill_ = standstill_offsets(m, exp)
+        if self.standstill_:
+            text = "; ".join(o["text"] for o in self.standstill_)
+            self.caveats_.append(text + (f": {', '.join(selected)} may stand in for it" if selected else ""))
+            if self.unexplained_ is None:
+                self.unexplained_ = dict(self.signature_, structured=True, hint=text, text=text)
+            else:
+                self.unexplained_ = dict(self.unexplained_, text=f"{text}. {self.unexplained_['text']}")
         self.measurement_ = m
         self.wall_s_ = time.perf_counter() - wall0
         say(f"final: {_fmt_fit(self.final_)} with {', '.join(selected) or 'no effect added'} "
@@ -1049,6 +1060,50 @@ def caution_texts(effect: str, span_s: float, period_s: float | None, short_reco
                 "effects (a few-millisecond sensor lag, a stiff drive train) are often like this, but so is an "
                 "effect that fits slow noise."]
     return []
+
+
+def standstill_offsets(m: Measurement, exp, *, min_samples: int = 10) -> list[dict]:
+    """Offsets of the current and speed signals while the drive stands still before the start-up.
+
+    Before the ramp the model's current and speed are zero; a record whose samples at rest read otherwise
+    has a sensor offset (or a current at rest that no catalogued effect makes, e.g. a holding torque).  An
+    effect that adds a constant torque once the kiln turns (motor-side Coulomb friction, a drag) can stand in
+    for a current offset over the rest of the record, so the user is told.  Counted: the samples before
+    ``t0 - 0.05 s`` whose measured speed is below 1 % of the final reference; an offset is reported when its
+    median is more than 5 standard errors (allowing for the noise's autocorrelation, see
+    :func:`variance_inflation`) and more than 0.5 % of the channel's peak from zero.
+
+    Parameters
+    ----------
+    m : Measurement
+        The record.
+    exp : Experiment
+        Its experiment (start ``t0`` [s], ``omega_ref`` [rpm]).
+    min_samples : int, default 10
+        Fewer samples at rest than this: nothing is said.
+
+    Returns
+    -------
+    list of dict
+        Per offset channel: ``channel``, ``offset`` [A or rpm], ``n_samples``, ``text``.
+    """
+    rest = (m.t < exp.t0 - 0.05) & (np.abs(m.speed) < 0.01 * max(abs(exp.omega_ref), 1e-9))
+    n = int(rest.sum())
+    if n < min_samples:
+        return []
+    out = []
+    for c, unit, what in (("current_A", "A", "current"), ("speed_rpm", "rpm", "speed")):
+        x = m.channels[c][rest]
+        med = float(np.median(x))
+        sig = robust_sigma(x - med)
+        se = sig * math.sqrt(variance_inflation(x - med) / n) if sig > 0 else 0.0
+        peak = float(np.max(np.abs(m.channels[c])))
+        if abs(med) > 5.0 * se and abs(med) > 0.005 * peak:
+            out.append({"channel": c, "offset": med, "n_samples": n,
+                        "text": (f"the {what} reads {med:+.3g} {unit} at standstill before the start ({n} samples, "
+                                 f"noise {sig:.2g} {unit}) where the model has zero: a sensor offset, or a {what} "
+                                 "at rest that no catalogued effect makes")})
+    return out
 
 
 def variance_inflation(e, max_lag: int | None = None) -> float:
