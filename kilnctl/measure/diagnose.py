@@ -331,13 +331,9 @@ class Diagnosis:
                                    self.n_local + 2, True)
         args = [(m, params, selected, "std", None, init, spread, exp, ff, None, 1, True)
                 for init in (greedy, setup_base)]
-        if pool is not None:
-            light = copy.copy(self)
-            light.__dict__ = {k: v for k, v in self.__dict__.items() if not k.endswith("_")}
-            futures = [pool.submit(_calibrate_job, (light, a)) for a in args]
-            cals = [f.result() for f in futures]
-        else:
-            cals = [self._calibrate(*a) for a in args]
+        cals = [c for c in self._run_calibrations(args, pool) if c is not None]
+        if not cals:  # both failed: the error of one, raised again
+            return self._calibrate(*args[0])
         best = min(cals, key=lambda c: c.cost_)
         best.local_fits_ = [f for c in cals for f in c.local_fits_]
         best.n_starts_ = sum(c.n_starts_ for c in cals)
@@ -529,18 +525,15 @@ class Diagnosis:
                 _, _, _, free = self._structure(params, rest)
                 init = {k: v for k, v in current.values_.items() if k in free}
                 args.append((m, params, rest, scales, train, init, (), exp, ff))
-            if pool is not None:
-                light = copy.copy(self)
-                light.__dict__ = {k: v for k, v in self.__dict__.items() if not k.endswith("_")}
-                futures = [pool.submit(_calibrate_job, (light, a)) for a in args]
-                cals = [f.result() for f in futures]
-            else:
-                cals = [self._calibrate(*a) for a in args]
+            cals = self._run_calibrations(args, pool)
             trials = []
             for e, a, cal in zip(selected, args, cals):
                 earlier = fitted.get(tuple(sorted(a[2])))
-                if earlier is not None and earlier.cost_ < cal.cost_:
+                if cal is None or (earlier is not None and earlier.cost_ < cal.cost_):
                     cal = earlier
+                if cal is None:  # the structure without e cannot be run where it was fitted: e stays
+                    say(f"  backward check: without {e} the model cannot be fitted: kept")
+                    continue
                 r = self._evidence(m, e, current, cal, scales, train, test, exp, 0.0)
                 trials.append((e, a[2], cal, r))
                 say(f"  backward check: without {e:<22} dBIC {r.delta_bic:+10.1f} (whitened "
@@ -557,6 +550,27 @@ class Diagnosis:
             say(f"removed {e}: with {others} in the model it no longer earns its place")
             selected, current = list(rest), cal
         return selected, current, removed
+
+    def _run_calibrations(self, args, pool) -> list:
+        """:meth:`_calibrate` on each argument tuple (in the pool when given); None for one that failed."""
+        if pool is not None:
+            light = copy.copy(self)
+            light.__dict__ = {k: v for k, v in self.__dict__.items() if not k.endswith("_")}
+            futures = [pool.submit(_calibrate_job, (light, a)) for a in args]
+            outs = []
+            for f in futures:
+                try:
+                    outs.append(f.result())
+                except KilnctlError:
+                    outs.append(None)
+            return outs
+        outs = []
+        for a in args:
+            try:
+                outs.append(self._calibrate(*a))
+            except KilnctlError:
+                outs.append(None)
+        return outs
 
     def _caveats(self, m, exp, params) -> list[str]:
         """Warnings about selected effects whose evidence is weaker than the criteria suggest."""
