@@ -8,6 +8,7 @@ shows the same two dBICs under the same names, says why each candidate was not a
 import html
 import json
 import math
+import re
 from types import SimpleNamespace
 
 from kilnctl import Parameters
@@ -107,7 +108,8 @@ def test_summary_shows_both_dbics_and_why_and_reads_at_100_columns():
     assert LONG in " ".join(x.strip() for x in text.split("unexplained residual: ")[1].splitlines())
     start = next(k for k, x in enumerate(lines) if "unexplained residual:" in x)
     assert lines[start + 1].startswith("      ") and len(lines[start].split("unexplained residual:")[0]) == 2
-    assert "5.47 A;" in flat and "-5.6 % (-1.2" in flat  # a number is not cut from its unit
+    assert "5.47 A;" in flat and "-5.6 % (-1.2" in flat
+    assert re.search(r"\d\n +(%|Hz|A|s|rpm)\b", text) is None  # a number is not cut from its unit
 
 
 def test_html_table_shows_both_dbics_and_why():
@@ -118,7 +120,7 @@ def test_html_table_shows_both_dbics_and_why():
     assert "<td>-25.5</td><td>+57.3</td>" in text and "<td>-2614.7</td><td>-743.6</td>" in text
     for effect, (verdict, words) in WHY.items():
         assert f"{verdict}: " in text and words in text
-    assert "whitened dBIC is the same with the residual's coloured noise modelled" in text  # how to read it
+    assert "whitened dBIC (the cautions' corrected dBIC) is the same with the residual's coloured noise" in text  # how to read it
 
 
 def test_ranking_figure_draws_both_dbics():
@@ -151,3 +153,14 @@ def test_a_failed_refit_shows_no_number_in_html():
     row = text[text.index("<td class=\"l\">current_limit</td>"):]
     row = row[:row.index("</tr>")]
     assert "nan" not in row and "inf" not in row and row.count("<td>-</td>") == 4
+
+
+def test_html_gives_the_unexplained_account_once_a_sentence_a_paragraph():
+    # truth: the signature's text (two sentences) and its hint, put into the hand-built diagnosis
+    d = hand_built()
+    figs = {"s": report.plot_ranking(d), "r": report.plot_ranking(d)}
+    text = html.unescape(report.diagnosis_html(d, figs))
+    first, second = LONG.split(". Suggests")
+    assert f"<p>{first}.</p><p>Suggests{second}</p>" in text
+    assert text.count("5.47 A") == 1  # not repeated in the warning at the top
+    assert "<b>Unexplained:</b> no structure beyond noise (the whole account" in text

@@ -105,3 +105,12 @@ def test_spectrum_needs_fs_or_t_but_not_both():
         residual_spectrum(e)
     with pytest.raises(ParameterError, match="both"):
         residual_spectrum(e, 50.0, t=np.arange(100) * 0.02)
+
+
+def test_lag_zero_is_one_even_where_two_samples_nearly_coincide():
+    # truth: r(0) = 1 by definition (each sample with itself); the time base has 149 samples closer than half a
+    # median step to their neighbour, which must not count at lag 0
+    t = historian_times(n=2000, spread=0.6, seed=8)
+    assert np.sum(np.diff(t) < 0.5 * median_step(t)) > 100
+    e = np.random.default_rng(9).standard_normal(t.size)
+    assert autocorr(e, 50, t=t)["r"][0] == pytest.approx(1.0, abs=1e-12)

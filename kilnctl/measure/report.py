@@ -13,6 +13,7 @@ import html
 import io
 import json
 import math
+import re
 import textwrap
 from pathlib import Path
 
@@ -406,10 +407,14 @@ def candidate_dict(d, i: int, r) -> dict:
     return {**first, **out}
 
 
+#: the space between a number and its unit (kept by :func:`_wrap`)
+_NUMBER_UNIT = re.compile(r"(?<=\d) (?=%|(?:A|Hz|s|ms|rpm|kg|m|N|rad|kg\*m\^2|N\*m)(?![\w*]))")
+
+
 def _wrap(text: str, indent: str, hang: int = 2) -> list[str]:
     """``text`` wrapped to :data:`SUMMARY_WIDTH` columns, ``indent`` before it and ``hang`` more before its
     continuation lines; a number stays with its unit and its ``+-`` error."""
-    glued = text.replace(" %", "\xa0%").replace(" +- ", "\xa0+-\xa0")
+    glued = _NUMBER_UNIT.sub("\xa0", text).replace(" +- ", "\xa0+-\xa0")
     lines = textwrap.wrap(glued, SUMMARY_WIDTH, initial_indent=indent, subsequent_indent=indent + " " * hang,
                           break_long_words=False, break_on_hyphens=False) or [indent.rstrip()]
     return [line.replace("\xa0", " ") for line in lines]
@@ -489,7 +494,10 @@ def diagnosis_headline(d) -> str:
 
 
 def diagnosis_summary(d) -> str:
-    """Return a readable account of a fitted diagnosis.
+    """Return a readable account of a fitted diagnosis, wrapped to :data:`SUMMARY_WIDTH` columns.
+
+    Each round is a table of its candidates (plain and whitened dBIC, held-out gain, current fit,
+    verdict), each followed by why (:func:`candidate_verdict`); long lines continue indented.
 
     Parameters
     ----------
@@ -717,9 +725,9 @@ HOW_TO_READ = {
                                         "added, on the fitting part of the record. It charges for every extra "
                                         "parameter; below −{min_delta_bic:g} counts as very strong evidence. It "
                                         "alone is fooled by coloured noise, hence the second test. The whitened "
-                                        "dBIC is the same with the residual's coloured noise modelled (an "
-                                        "autoregressive model of it): the evidence that is left once slow noise "
-                                        "is allowed for."),
+                                        "dBIC (the cautions' corrected dBIC) is the same with the residual's "
+                                        "coloured noise modelled (an autoregressive model of it): the evidence "
+                                        "that is left once slow noise is allowed for."),
     "heldout": ("held-out gain", "How much better (in %) the model with the effect predicts the part of the "
                                  "record it was not fitted on. An effect that only fits noise gains nothing "
                                  "there; it must gain more than {min_holdout_gain:g} %. An effect whose trace lies "
@@ -954,9 +962,12 @@ def diagnosis_html(d, figs=None) -> str:
                          f"{verdict}: {why}" + (". On bound: " + ", ".join(r.on_bound)) * bool(r.on_bound)))
         parts.append(table(["effect", "dBIC", "whitened dBIC", "held-out gain [%]", "current fit [%]",
                             "effect parameters", "verdict and why"], rows, left=1, selected=sel, wrap=(5, 6)))
-    parts.append("<h2>What the final model still misses</h2><p>" + esc(d.signature_["text"]) + "</p>")
-    warnings = ([("Unexplained", d.unexplained_["text"])] if d.unexplained_ else []) + [
-        ("Caution", c) for c in d.caveats_]
+    # the whole account once, a sentence a paragraph; the warning at the top names what it suggests
+    misses = (d.unexplained_ or d.signature_)["text"]
+    parts.append("<h2>What the final model still misses</h2>"
+                 + "".join(f"<p>{esc(x)}</p>" for x in re.split(r"(?<=\.) (?=[A-Za-z])", misses)))
+    warnings = ([("Unexplained", f"{d.unexplained_['hint']} (the whole account: \"What the final model still "
+                                 "misses\" below)")] if d.unexplained_ else []) + [("Caution", c) for c in d.caveats_]
     return report_page(f"Diagnosis of {record_name_of(d.measurement_.source)}", diagnosis_plain_headline(d), parts,
                        warnings=warnings, terms=("fit", "dbic", "heldout", "cautions", "uncertainty", "sigma"),
                        values={"min_delta_bic": d.min_delta_bic, "min_holdout_gain": d.min_holdout_gain,

@@ -94,9 +94,9 @@ def _on_grid(t, dt) -> bool:
 def _corr_times(t, a, b, max_lag):
     """:func:`_corr_lags` on an uneven time base: the sample pairs grouped by their time difference.
 
-    A pair (i, j) counts at lag k = round((t_i - t_j) / dt), dt the median step; the lag's
-    correlation is the mean product of its pairs, times 1 - |k| dt / T (T the record's span plus
-    one step), over s_a s_b.  On an even time base every lag k holds the N - |k| pairs of the index
+    A pair (i, j) counts at lag k = round((t_i - t_j) / dt), dt the median step (lag 0: only the
+    samples with themselves, so that r_aa(0) = 1); the lag's correlation is the mean product of
+    its pairs, times 1 - |k| dt / T (T the record's span plus one step), over s_a s_b.  On an even time base every lag k holds the N - |k| pairs of the index
     offset k and T = N dt, so this is :func:`_corr_lags` exactly (which then computes it, by FFT).
     """
     t = np.asarray(t, float)
@@ -114,6 +114,8 @@ def _corr_times(t, a, b, max_lag):
         near = k <= max_lag
         if not near.any():
             break  # t increases: every further offset is farther still
+        if m:
+            near &= k > 0  # lag 0 is each sample with itself, as on an even time base
         k = k[near]
         s += np.bincount(max_lag + k, a[m:][near] * b[:n - m][near], size)
         cnt += np.bincount(max_lag + k, minlength=size)
