@@ -164,3 +164,47 @@ def test_html_gives_the_unexplained_account_once_a_sentence_a_paragraph():
     assert f"<p>{first}.</p><p>Suggests{second}</p>" in text
     assert text.count("5.47 A") == 1  # not repeated in the warning at the top
     assert "<b>Unexplained:</b> no structure beyond noise (the whole account" in text
+
+
+def backward_built():
+    """The greedy search added drivetrain_compliance (round 1), then second_motor (round 2); nothing more in round
+    3; the backward check then removed drivetrain_compliance (it only stood in for the second motor)."""
+    d = hand_built()
+    why_removed = ("removed in the backward check: with second_motor in the model it no longer earns its place "
+                   "(BIC does not improve enough (dBIC +3.0 >= -10))")
+    d.rounds_ = [[_cand("drivetrain_compliance", -900.0, -300.0, 30.0, True, "BIC and held-out fit both improve"),
+                  _cand("second_motor", -800.0, -250.0, 28.0, True, "BIC and held-out fit both improve")],
+                 [_cand("second_motor", -400.0, -120.0, 12.0, True, "BIC and held-out fit both improve"),
+                  _cand("backlash", 4.0, 6.0, 0.0, False, "BIC does not improve enough (dBIC +4.0 >= -10)")],
+                 [_cand("backlash", 5.0, 5.5, 0.0, False, "BIC does not improve enough (dBIC +5.0 >= -10)")]]
+    d.ranking_ = d.rounds_[0]
+    d.selected_ = ["second_motor"]
+    d.removed_ = [_cand("drivetrain_compliance", 3.0, 2.0, -0.1, False, why_removed)]
+    return d
+
+
+def test_an_effect_the_backward_check_removed_is_reported_with_why_everywhere():
+    # truth: the rounds and the removal put into backward_built()
+    d = backward_built()
+    text = report.diagnosis_summary(d)
+    flat = " ".join(x.strip() for x in text.splitlines())
+    assert "round 2: candidates against base + drivetrain_compliance" in text  # the greedy order, not selected_
+    assert "round 3: candidates against base + drivetrain_compliance, second_motor" in text
+    rows = [x for x in text.splitlines() if x.strip().startswith("drivetrain_compliance ")]
+    assert rows[0].rstrip().endswith("added, then removed") and rows[1].rstrip().endswith("removed")
+    assert rows[1].split()[1:3] == ["+3.0", "+2.0"]
+    assert "no longer earns its place" in flat and "selected: second_motor" in text
+    assert max(len(x) for x in text.splitlines()) <= report.SUMMARY_WIDTH
+
+    out = json.loads(json.dumps(report.diagnosis_dict(d), allow_nan=False))
+    assert [(r["effect"], r["verdict"]) for r in out["rounds"][0]] == [("drivetrain_compliance", "added, then removed"),
+                                                                        ("second_motor", "supported, not added")]
+    assert out["rounds"][1][0]["verdict"] == "added"
+    (rem,) = out["removed"]
+    assert rem["effect"] == "drivetrain_compliance" and rem["verdict"] == "removed"
+    assert rem["delta_bic"] == 3.0 and rem["delta_bic_whitened"] == 2.0 and "no longer earns" in rem["reason"]
+
+    page = html.unescape(report.diagnosis_html(d, {"s": report.plot_ranking(d), "r": report.plot_ranking(d)}))
+    assert "<h3>Round 2: against base + drivetrain_compliance</h3>" in page
+    tail = page[page.index("Backward check: effects removed"):]
+    assert "<td>+3.0</td><td>+2.0</td>" in tail and "removed: removed in the backward check" in tail

@@ -29,7 +29,7 @@ __all__ = ["figure_tag", "table", "page", "write_report_files", "esc", "json_num
            "diagnosis_html", "write_diagnosis_report", "write_comparison_report", "comparison_html",
            "diagnosis_plain_headline", "uncertainty_words", "how_to_read", "settings_table", "parameter_table",
            "figure_block", "record_name_of", "HOW_TO_READ", "pretty_unit", "value_pair", "png_bytes", "write_page_files",
-           "report_page", "candidate_dict", "candidate_verdict", "SUMMARY_WIDTH"]
+           "report_page", "candidate_dict", "candidate_verdict", "greedy_order", "SUMMARY_WIDTH"]
 
 _CSS = """
 *{box-sizing:border-box}
@@ -348,6 +348,23 @@ def _params_dict(cal) -> dict:
 SUMMARY_WIDTH = 100
 
 
+def greedy_order(d) -> list[str]:
+    """The effects the greedy search added, round by round (before the backward check removed any).
+
+    Parameters
+    ----------
+    d : Diagnosis
+        A fitted diagnosis.
+
+    Returns
+    -------
+    list of str
+        The first candidate of each round that added one (a round adds its first-ranked candidate when
+        it is supported).
+    """
+    return [rnd[0].effect for rnd in d.rounds_ if rnd and rnd[0].supported]
+
+
 def candidate_verdict(d, i: int, r) -> tuple[str, str]:
     """What became of a candidate of a diagnosis round, and why.
 
@@ -363,19 +380,32 @@ def candidate_verdict(d, i: int, r) -> tuple[str, str]:
     Returns
     -------
     (str, str)
-        ``added``, ``supported, not added`` or ``rejected``; and the reason:
-        the candidate's own (:attr:`CandidateResult.reason`), or, for a
-        supported candidate the round did not add, which one it added in its
-        place.
+        ``added``, ``added, then removed`` (by the backward check), ``supported, not added`` or
+        ``rejected``; and the reason: the candidate's own (:attr:`CandidateResult.reason`), with the
+        backward check's for a removed one, or, for a supported candidate the round did not add,
+        which one it added in its place.
     """
-    added = d.selected_[i] if i < len(d.selected_) else None
+    rnd = d.rounds_[i]
+    added = rnd[0].effect if rnd and rnd[0].supported else None
     if r.supported and r.effect == added:
+        removed = {x.effect: x for x in getattr(d, "removed_", None) or []}
+        if r.effect in removed:
+            return "added, then removed", f"{r.reason}; then {removed[r.effect].reason}"
         return "added", r.reason
     if r.supported and added is not None:
         then = (f"tried again against it in round {i + 2}" if i + 1 < len(d.rounds_) else
-                f"the search stops at {len(d.selected_)} effect{'s' * (len(d.selected_) > 1)}")
+                f"at most {d.max_effects} effects are added")
         return "supported, not added", f"{r.reason}; but {added} has the lower dBIC and was added instead; {then}"
     return ("supported, not added" if r.supported else "rejected"), r.reason
+
+
+def _result_dict(r, verdict: str, why: str) -> dict:
+    """:meth:`CandidateResult.to_dict` led by the effect, both dBICs, the verdict and why."""
+    out = r.to_dict()
+    first = {"effect": out.pop("effect"), "delta_bic": out.pop("delta_bic"),
+             "delta_bic_whitened": json_number(r.delta_bic_corrected), "verdict": verdict, "reason": why}
+    out.pop("reason", None)
+    return {**first, **out}
 
 
 def candidate_dict(d, i: int, r) -> dict:
@@ -399,12 +429,7 @@ def candidate_dict(d, i: int, r) -> dict:
         (see :func:`candidate_verdict`) and ``reason`` (why, for every
         candidate).
     """
-    out = r.to_dict()
-    verdict, why = candidate_verdict(d, i, r)
-    first = {"effect": out.pop("effect"), "delta_bic": out.pop("delta_bic"),
-             "delta_bic_whitened": json_number(r.delta_bic_corrected), "verdict": verdict, "reason": why}
-    out.pop("reason", None)
-    return {**first, **out}
+    return _result_dict(r, *candidate_verdict(d, i, r))
 
 
 #: the space between a number and its unit (kept by :func:`_wrap`)
@@ -451,6 +476,7 @@ def diagnosis_dict(d) -> dict:
         "ranking": [candidate_dict(d, 0, r) for r in d.ranking_],
         "rounds": [[candidate_dict(d, i, r) for r in rnd] for i, rnd in enumerate(d.rounds_)],
         "selected": list(d.selected_),
+        "removed": [_result_dict(r, "removed", r.reason) for r in getattr(d, "removed_", None) or []],
         "final": {k: json_number(v) for k, v in d.final_.items()},
         "final_parameters": _params_dict(fc),
         "final_search": dict(getattr(d, "final_search_", {})),
@@ -493,6 +519,14 @@ def diagnosis_headline(d) -> str:
             + (f", {', '.join(parts)}" if parts else ""))
 
 
+def _summary_rows(r, verdict: str, why: str) -> list[str]:
+    """A candidate's row of the summary's table, then why, wrapped."""
+    gain = f"{_signed(r.holdout_gain)} %" if math.isfinite(r.holdout_gain) else "-"
+    fi = _fit_text(r.fit_percent.get("current_A", math.nan))
+    return ([f"    {r.effect:<22} {_bic_text(r.delta_bic):>9} {_bic_text(r.delta_bic_corrected):>14} {gain:>9} "
+             f"{fi:>6}  {verdict}"] + _wrap(f"why: {why}", " " * 8, 5))
+
+
 def diagnosis_summary(d) -> str:
     """Return a readable account of a fitted diagnosis, wrapped to :data:`SUMMARY_WIDTH` columns.
 
@@ -513,17 +547,19 @@ def diagnosis_summary(d) -> str:
     lines += _wrap("dBIC: BIC change on the fitted part (negative favours the effect; plain and with the "
                    "residual's coloured noise modelled, 'whitened'); held-out: error reduction on the part not "
                    "fitted [%]; fit\u00a0I: current fit on the fitted part [%]", "  ")
+    order = greedy_order(d)
+    head = f"    {'effect':<22} {'dBIC':>9} {'whitened dBIC':>14} {'held-out':>9} {'fit I':>6}  verdict"
     for i, rnd in enumerate(d.rounds_):
         lines.append(f"  round {i + 1}: candidates against "
-                     + ("the base" if i == 0 else "base + " + ", ".join(d.selected_[:i])))
-        lines.append(f"    {'effect':<22} {'dBIC':>9} {'whitened dBIC':>14} {'held-out':>9} {'fit I':>6}  verdict")
-        for r in rnd:
-            fi = _fit_text(r.fit_percent.get("current_A", math.nan))
-            gain = f"{_signed(r.holdout_gain)} %" if math.isfinite(r.holdout_gain) else "-"
-            verdict, why = candidate_verdict(d, i, r)
-            lines.append(f"    {r.effect:<22} {_bic_text(r.delta_bic):>9} {_bic_text(r.delta_bic_corrected):>14} "
-                         f"{gain:>9} {fi:>6}  {verdict}")
-            lines += _wrap(f"why: {why}", " " * 8, 5)
+                     + ("the base" if i == 0 else "base + " + ", ".join(order[:i])))
+        lines.append(head)
+        lines += [x for r in rnd for x in _summary_rows(r, *candidate_verdict(d, i, r))]
+    removed = getattr(d, "removed_", None) or []
+    if removed:
+        lines += _wrap("backward check: effects removed, each judged as if added to the model without it (the "
+                       "dBICs of keeping it)", "  ")
+        lines.append(head)
+        lines += [x for r in removed for x in _summary_rows(r, "removed", r.reason)]
     lines += _wrap(f"selected: {', '.join(d.selected_) or 'nothing'}", "  ")
     lines += _wrap(f"final: {format_fit(d.final_)}", "  ")
     fs = getattr(d, "final_search_", None)
@@ -913,6 +949,15 @@ _DIAGNOSIS_SETTINGS = {
 }
 
 
+def _candidate_row(r, verdict: str, why: str) -> tuple:
+    """A candidate's row of the report's tables (header: see :func:`diagnosis_html`)."""
+    pars = "; ".join(f"{k} = {_value_words(v['value'], v['stderr'], k in r.not_identifiable, v['unit'])}"
+                     for k, v in r.parameters.items() if k in _effect_params(r.effect))
+    return (r.effect, _bic_text(r.delta_bic), _bic_text(r.delta_bic_corrected), _signed(r.holdout_gain),
+            _fit_text(r.fit_percent.get("current_A", math.nan)), pars or "-",
+            f"{verdict}: {why}" + (". On bound: " + ", ".join(r.on_bound)) * bool(r.on_bound))
+
+
 def diagnosis_html(d, figs=None) -> str:
     """Return the report of a fitted diagnosis as one self-contained HTML page.
 
@@ -947,21 +992,22 @@ def diagnosis_html(d, figs=None) -> str:
     parts.append(figure_block(f_rank, "ranking", "Green: supported (both tests passed); grey: not supported. "
                               "Left: dBIC, plain (solid) and whitened (hatched), the round-1 table's two dBIC "
                               "columns. Dotted lines: the thresholds."))
+    order = greedy_order(d)
+    header = ["effect", "dBIC", "whitened dBIC", "held-out gain [%]", "current fit [%]", "effect parameters",
+              "verdict and why"]
     for i, rnd in enumerate(d.rounds_):
         parts.append(f"<h3>Round {i + 1}: against " + esc("the calibrated base" if i == 0 else
-                                                          "base + " + ", ".join(d.selected_[:i])) + "</h3>")
-        rows, sel = [], set()
-        for j, r in enumerate(rnd):
-            verdict, why = candidate_verdict(d, i, r)
-            if verdict == "added":
-                sel.add(j)
-            pars = "; ".join(f"{k} = {_value_words(v['value'], v['stderr'], k in r.not_identifiable, v['unit'])}"
-                             for k, v in r.parameters.items() if k in _effect_params(r.effect))
-            rows.append((r.effect, _bic_text(r.delta_bic), _bic_text(r.delta_bic_corrected), _signed(r.holdout_gain),
-                         _fit_text(r.fit_percent.get("current_A", math.nan)), pars or "-",
-                         f"{verdict}: {why}" + (". On bound: " + ", ".join(r.on_bound)) * bool(r.on_bound)))
-        parts.append(table(["effect", "dBIC", "whitened dBIC", "held-out gain [%]", "current fit [%]",
-                            "effect parameters", "verdict and why"], rows, left=1, selected=sel, wrap=(5, 6)))
+                                                          "base + " + ", ".join(order[:i])) + "</h3>")
+        verdicts = [candidate_verdict(d, i, r) for r in rnd]
+        rows = [_candidate_row(r, *v) for r, v in zip(rnd, verdicts)]
+        sel = {j for j, (v, _) in enumerate(verdicts) if v == "added"}
+        parts.append(table(header, rows, left=1, selected=sel, wrap=(5, 6)))
+    removed = getattr(d, "removed_", None) or []
+    if removed:
+        parts.append("<h3>Backward check: effects removed</h3><p>Each judged as if added to the model without it "
+                     "(the dBICs of keeping it).</p>")
+        parts.append(table(header, [_candidate_row(r, "removed", r.reason) for r in removed], left=1,
+                           wrap=(5, 6)))
     # the whole account once, a sentence a paragraph; the warning at the top names what it suggests
     misses = (d.unexplained_ or d.signature_)["text"]
     parts.append("<h2>What the final model still misses</h2>"
