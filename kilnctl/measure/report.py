@@ -608,6 +608,7 @@ def plot_ranking(d, fig=None):
     """
     from matplotlib.figure import Figure
     from matplotlib.patches import Patch
+    from matplotlib.transforms import ScaledTranslation
 
     from ..figures import COLORS, finish, record_name
 
@@ -636,7 +637,9 @@ def plot_ranking(d, fig=None):
                        Patch(facecolor="white", hatch="///", edgecolor="0.25",
                              label="hatched: -whitened dBIC (coloured noise modelled)"),
                        *a0.get_legend_handles_labels()[0]], fontsize=7.5, loc="upper center", ncol=2,
-              bbox_to_anchor=(0.5, -0.22))
+              # below the tick labels and the two-line axis label, whatever the panel's height
+              bbox_to_anchor=(0.5, 0.0), bbox_transform=a0.transAxes + ScaledTranslation(0, -0.62,
+                                                                                           fig.dpi_scale_trans))
     gains = [r.holdout_gain if math.isfinite(r.holdout_gain) else 0 for r in rk]
     a1.barh(y, [max(-100.0, g) for g in gains], color=colors)
     lim = min(105.0, max(10.0, 1.15 * max([abs(g) for g in gains] + [d.min_holdout_gain])))
