@@ -46,7 +46,7 @@ class ChannelComparison:
     sigma : float
         Robust residual scale 1.4826 median|e| [unit].
     whiteness : dict
-        :func:`~kilnctl.measure.stats.autocorr` result (lags in samples).
+        :func:`~kilnctl.measure.stats.autocorr` result (lags in steps of ``dt``).
     xcorr : dict of str to dict
         Cross-correlation with the input (``speed_ref_rpm``) and the other
         measured channel, :func:`~kilnctl.measure.stats.crosscorr` results.
@@ -347,12 +347,12 @@ def compare_run(measurement: Measurement, run: ModelRun, experiment: Experiment,
         e = y - yhat
         others = {"speed_ref_rpm (input)": u}
         others.update({f"{o} (measured)": meas[o] for o in CHANNELS if o != k})
-        xc = {label: crosscorr(e, sig, max_lag) for label, sig in others.items()}
+        xc = {label: crosscorr(e, sig, max_lag, t=t) for label, sig in others.items()}
         fails = [_describe(t, y, yhat, e, a, b, unit, phases) for a, b in failing_intervals(t, e)]
         chans[k] = ChannelComparison(
             name=k, unit=unit, measured=y, model=yhat, residual=e, fit=fit_percent(y, yhat),
             bias=float(np.mean(e)), rms=float(np.sqrt(np.mean(e ** 2))), sigma=robust_sigma(e),
-            whiteness=autocorr(e, max_lag), xcorr=xc, spectrum=residual_spectrum(e, 1.0 / dt), failing=fails)
+            whiteness=autocorr(e, max_lag, t=t), xcorr=xc, spectrum=residual_spectrum(e, t=t), failing=fails)
     extra = {"kiln_angle": kiln_angle(t, meas["speed_rpm"], (params or Parameters()).n),
              "model_outputs": run.outputs}
     return Comparison(t=t, channels=chans, experiment=experiment, model=model, effects=tuple(effects),

@@ -13,6 +13,8 @@ import html
 import io
 import json
 import math
+import re
+import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -27,7 +29,7 @@ __all__ = ["figure_tag", "table", "page", "write_report_files", "esc", "json_num
            "diagnosis_html", "write_diagnosis_report", "write_comparison_report", "comparison_html",
            "diagnosis_plain_headline", "uncertainty_words", "how_to_read", "settings_table", "parameter_table",
            "figure_block", "record_name_of", "HOW_TO_READ", "pretty_unit", "value_pair", "png_bytes", "write_page_files",
-           "report_page"]
+           "report_page", "candidate_dict", "candidate_verdict", "greedy_order", "SUMMARY_WIDTH"]
 
 _CSS = """
 *{box-sizing:border-box}
@@ -342,6 +344,117 @@ def _params_dict(cal) -> dict:
 
 
 # --- diagnosis ----------------------------------------------------------------------------------------
+#: width [characters] the text summary of a diagnosis is wrapped to
+SUMMARY_WIDTH = 100
+
+
+def greedy_order(d) -> list[str]:
+    """The effects the greedy search added, round by round (before the backward check removed any).
+
+    Parameters
+    ----------
+    d : Diagnosis
+        A fitted diagnosis.
+
+    Returns
+    -------
+    list of str
+        The first candidate of each round that added one (a round adds its first-ranked candidate when
+        it is supported).
+    """
+    return [rnd[0].effect for rnd in d.rounds_ if rnd and rnd[0].supported]
+
+
+def candidate_verdict(d, i: int, r) -> tuple[str, str]:
+    """What became of a candidate of a diagnosis round, and why.
+
+    Parameters
+    ----------
+    d : Diagnosis
+        A fitted diagnosis.
+    i : int
+        Index of the round in ``d.rounds_``.
+    r : CandidateResult
+        A candidate of that round.
+
+    Returns
+    -------
+    (str, str)
+        ``added``, ``added, then removed`` (by the backward check), ``supported, not added`` or
+        ``rejected``; and the reason: the candidate's own (:attr:`CandidateResult.reason`), with the
+        backward check's for a removed one, or, for a supported candidate the round did not add,
+        which one it added in its place.
+    """
+    rnd = d.rounds_[i]
+    added = rnd[0].effect if rnd and rnd[0].supported else None
+    if r.supported and r.effect == added:
+        removed = {x.effect: x for x in getattr(d, "removed_", None) or []}
+        if r.effect in removed:
+            return "added, then removed", f"{r.reason}; then {removed[r.effect].reason}"
+        return "added", r.reason
+    if r.supported and added is not None:
+        then = (f"tried again against it in round {i + 2}" if i + 1 < len(d.rounds_) else
+                f"at most {d.max_effects} effects are added")
+        return "supported, not added", f"{r.reason}; but {added} has the lower dBIC and was added instead; {then}"
+    return ("supported, not added" if r.supported else "rejected"), r.reason
+
+
+def _result_dict(r, verdict: str, why: str) -> dict:
+    """:meth:`CandidateResult.to_dict` led by the effect, both dBICs, the verdict and why."""
+    out = r.to_dict()
+    first = {"effect": out.pop("effect"), "delta_bic": out.pop("delta_bic"),
+             "delta_bic_whitened": json_number(r.delta_bic_corrected), "verdict": verdict, "reason": why}
+    out.pop("reason", None)
+    return {**first, **out}
+
+
+def candidate_dict(d, i: int, r) -> dict:
+    """A candidate of a diagnosis round as a JSON-ready dictionary, with both dBICs and its verdict.
+
+    Parameters
+    ----------
+    d : Diagnosis
+        A fitted diagnosis.
+    i : int
+        Index of the round in ``d.rounds_``.
+    r : CandidateResult
+        A candidate of that round.
+
+    Returns
+    -------
+    dict
+        :meth:`CandidateResult.to_dict` with ``delta_bic`` (plain, as before)
+        followed by ``delta_bic_whitened`` (the residual's coloured noise
+        modelled; the same number as ``delta_bic_corrected``), ``verdict``
+        (see :func:`candidate_verdict`) and ``reason`` (why, for every
+        candidate).
+    """
+    return _result_dict(r, *candidate_verdict(d, i, r))
+
+
+#: the space between a number and its unit (kept by :func:`_wrap`)
+_NUMBER_UNIT = re.compile(r"(?<=\d) (?=%|(?:A|Hz|s|ms|rpm|kg|m|N|rad|kg\*m\^2|N\*m)(?![\w*]))")
+
+
+def _wrap(text: str, indent: str, hang: int = 2) -> list[str]:
+    """``text`` wrapped to :data:`SUMMARY_WIDTH` columns, ``indent`` before it and ``hang`` more before its
+    continuation lines; a number stays with its unit and its ``+-`` error."""
+    glued = _NUMBER_UNIT.sub("\xa0", text).replace(" +- ", "\xa0+-\xa0")
+    lines = textwrap.wrap(glued, SUMMARY_WIDTH, initial_indent=indent, subsequent_indent=indent + " " * hang,
+                          break_long_words=False, break_on_hyphens=False) or [indent.rstrip()]
+    return [line.replace("\xa0", " ") for line in lines]
+
+
+def _bic_text(v) -> str:
+    """``-25.5``, ``+57.3``; ``-`` for no number (a refit that failed)."""
+    return f"{v:+.1f}" if v is not None and math.isfinite(v) else "-"
+
+
+def _fit_text(v) -> str:
+    """``95.1``; ``-`` for no number."""
+    return f"{v:.1f}" if v is not None and math.isfinite(v) else "-"
+
+
 def diagnosis_dict(d) -> dict:
     """Return a fitted diagnosis as a JSON-ready dictionary.
 
@@ -360,9 +473,10 @@ def diagnosis_dict(d) -> dict:
         "source": d.measurement_.source,
         "baseline": {k: json_number(v) for k, v in d.baseline_.items()},
         "baseline_parameters": _params_dict(d.base_calibration_),
-        "ranking": [r.to_dict() for r in d.ranking_],
-        "rounds": [[r.to_dict() for r in rnd] for rnd in d.rounds_],
+        "ranking": [candidate_dict(d, 0, r) for r in d.ranking_],
+        "rounds": [[candidate_dict(d, i, r) for r in rnd] for i, rnd in enumerate(d.rounds_)],
         "selected": list(d.selected_),
+        "removed": [_result_dict(r, "removed", r.reason) for r in getattr(d, "removed_", None) or []],
         "final": {k: json_number(v) for k, v in d.final_.items()},
         "final_parameters": _params_dict(fc),
         "final_search": dict(getattr(d, "final_search_", {})),
@@ -405,8 +519,19 @@ def diagnosis_headline(d) -> str:
             + (f", {', '.join(parts)}" if parts else ""))
 
 
+def _summary_rows(r, verdict: str, why: str) -> list[str]:
+    """A candidate's row of the summary's table, then why, wrapped."""
+    gain = f"{_signed(r.holdout_gain)} %" if math.isfinite(r.holdout_gain) else "-"
+    fi = _fit_text(r.fit_percent.get("current_A", math.nan))
+    return ([f"    {r.effect:<22} {_bic_text(r.delta_bic):>9} {_bic_text(r.delta_bic_corrected):>14} {gain:>9} "
+             f"{fi:>6}  {verdict}"] + _wrap(f"why: {why}", " " * 8, 5))
+
+
 def diagnosis_summary(d) -> str:
-    """Return a readable account of a fitted diagnosis.
+    """Return a readable account of a fitted diagnosis, wrapped to :data:`SUMMARY_WIDTH` columns.
+
+    Each round is a table of its candidates (plain and whitened dBIC, held-out gain, current fit,
+    verdict), each followed by why (:func:`candidate_verdict`); long lines continue indented.
 
     Parameters
     ----------
@@ -417,27 +542,36 @@ def diagnosis_summary(d) -> str:
     -------
     str
     """
-    lines = [f"diagnosis of {d.measurement_.source} ({d.wall_s_:.0f} s)",
-             f"  baseline (calibrated {', '.join(d.calibrate)}): {format_fit(d.baseline_)}"]
+    lines = _wrap(f"diagnosis of {d.measurement_.source} ({d.wall_s_:.0f} s)", "")
+    lines += _wrap(f"baseline (calibrated {', '.join(d.calibrate)}): {format_fit(d.baseline_)}", "  ")
+    lines += _wrap("dBIC: BIC change on the fitted part (negative favours the effect; plain and with the "
+                   "residual's coloured noise modelled, 'whitened'); held-out: error reduction on the part not "
+                   "fitted [%]; fit\u00a0I: current fit on the fitted part [%]", "  ")
+    order = greedy_order(d)
+    head = f"    {'effect':<22} {'dBIC':>9} {'whitened dBIC':>14} {'held-out':>9} {'fit I':>6}  verdict"
     for i, rnd in enumerate(d.rounds_):
         lines.append(f"  round {i + 1}: candidates against "
-                     + ("the base" if i == 0 else "base + " + ", ".join(d.selected_[:i])))
-        lines.append(f"    {'effect':<22} {'dBIC':>10} {'held-out':>9} {'fit I %':>8}  verdict")
-        for r in rnd:
-            fi = r.fit_percent.get("current_A", math.nan)
-            lines.append(f"    {r.effect:<22} {r.delta_bic:>10.1f} {r.holdout_gain:>8.1f}% {fi:>8.1f}  "
-                         f"{'SUPPORTED' if r.supported else r.reason}")
-    lines.append(f"  selected: {', '.join(d.selected_) or 'nothing'}")
-    lines.append(f"  final: {format_fit(d.final_)}")
+                     + ("the base" if i == 0 else "base + " + ", ".join(order[:i])))
+        lines.append(head)
+        lines += [x for r in rnd for x in _summary_rows(r, *candidate_verdict(d, i, r))]
+    removed = getattr(d, "removed_", None) or []
+    if removed:
+        lines += _wrap("backward check: effects removed, each judged as if added to the model without it (the "
+                       "dBICs of keeping it)", "  ")
+        lines.append(head)
+        lines += [x for r in removed for x in _summary_rows(r, "removed", r.reason)]
+    lines += _wrap(f"selected: {', '.join(d.selected_) or 'nothing'}", "  ")
+    lines += _wrap(f"final: {format_fit(d.final_)}", "  ")
     fs = getattr(d, "final_search_", None)
     if fs and fs["n_local_fits"]:
-        lines.append(f"  final refit: the best of {fs['n_local_fits']} local fits from {fs['n_starts']} starting "
-                     "points; their current fits " + ", ".join(f"{v:.1f}" for v in fs["fit_current_percent"]) + " %")
-    lines.append("  " + diagnosis_headline(d))
+        lines += _wrap(f"final refit: the best of {fs['n_local_fits']} local fits from {fs['n_starts']} starting "
+                       "points; their current fits " + ", ".join(f"{v:.1f}" for v in fs["fit_current_percent"])
+                       + " %", "  ")
+    lines += _wrap(diagnosis_headline(d), "  ")
     if d.unexplained_:
-        lines.append("  unexplained residual: " + d.unexplained_["text"])
+        lines += _wrap("unexplained residual: " + d.unexplained_["text"], "  ", 4)
     for c in d.caveats_:
-        lines.append("  caution: " + c)
+        lines += _wrap("caution: " + c, "  ", 4)
     return "\n".join(lines)
 
 
@@ -474,17 +608,22 @@ def plot_ranking(d, fig=None):
     """
     from matplotlib.figure import Figure
     from matplotlib.patches import Patch
+    from matplotlib.transforms import ScaledTranslation
 
     from ..figures import COLORS, finish, record_name
 
     rk = d.ranking_
-    fig = fig or Figure(figsize=(13, 2.2 + 0.3 * max(len(rk), 4)))
+    fig = fig or Figure(figsize=(13, 2.8 + 0.3 * max(len(rk), 4)))  # the first panel's legend below it
     a0, a1, a2 = fig.subplots(1, 3, gridspec_kw={"width_ratios": [3, 3, 2]})
     names = [r.effect for r in rk]
     colors = [COLORS["supported"] if r.supported else COLORS["rejected"] for r in rk]
     y = np.arange(len(rk))
-    dbic = [max(-1e6, r.delta_bic) if math.isfinite(r.delta_bic) else 0 for r in rk]
-    a0.barh(y, [-v for v in dbic], color=colors)
+    def clipped(v):
+        return max(-1e6, v) if math.isfinite(v) else 0.0
+
+    a0.barh(y - 0.2, [-clipped(r.delta_bic) for r in rk], 0.4, color=colors)
+    a0.barh(y + 0.2, [-clipped(r.delta_bic_corrected) for r in rk], 0.4, color=colors, alpha=0.55, hatch="///",
+            edgecolor="0.25", lw=0)
     a0.set_xscale("symlog", linthresh=10)
     a0.axvline(d.min_delta_bic, color=COLORS["threshold"], ls=":", label=f"threshold {d.min_delta_bic:g}")
     a0.axvline(0, color="0.3", lw=0.6)
@@ -494,7 +633,13 @@ def plot_ranking(d, fig=None):
     a0.set_title("evidence in the fitted part (more is better)", fontsize=9)
     a0.legend(handles=[Patch(color=COLORS["supported"], label="supported (both tests)"),
                        Patch(color=COLORS["rejected"], label="not supported"),
-                       *a0.get_legend_handles_labels()[0]], fontsize=7.5, loc="lower right")
+                       Patch(facecolor="white", edgecolor="0.25", label="solid: -dBIC (plain)"),
+                       Patch(facecolor="white", hatch="///", edgecolor="0.25",
+                             label="hatched: -whitened dBIC (coloured noise modelled)"),
+                       *a0.get_legend_handles_labels()[0]], fontsize=7.5, loc="upper center", ncol=2,
+              # below the tick labels and the two-line axis label, whatever the panel's height
+              bbox_to_anchor=(0.5, 0.0), bbox_transform=a0.transAxes + ScaledTranslation(0, -0.62,
+                                                                                           fig.dpi_scale_trans))
     gains = [r.holdout_gain if math.isfinite(r.holdout_gain) else 0 for r in rk]
     a1.barh(y, [max(-100.0, g) for g in gains], color=colors)
     lim = min(105.0, max(10.0, 1.15 * max([abs(g) for g in gains] + [d.min_holdout_gain])))
@@ -615,9 +760,13 @@ HOW_TO_READ = {
     "whiteness": ("residual autocorrelation", "A residual that is only noise has its autocorrelation inside the "
                                               "grey 99 % band; many lags outside mean the model misses something "
                                               "with a time structure."),
-    "dbic": ("dBIC", "How much the Bayesian information criterion falls when an effect is added, on the fitting "
-                     "part of the record. It charges for every extra parameter; below −{min_delta_bic:g} counts as "
-                     "very strong evidence. It alone is fooled by coloured noise, hence the second test."),
+    "dbic": ("dBIC and whitened dBIC", "How much the Bayesian information criterion falls when an effect is "
+                                        "added, on the fitting part of the record. It charges for every extra "
+                                        "parameter; below −{min_delta_bic:g} counts as very strong evidence. It "
+                                        "alone is fooled by coloured noise, hence the second test. The whitened "
+                                        "dBIC (the cautions' corrected dBIC) is the same with the residual's "
+                                        "coloured noise modelled (an autoregressive model of it): the evidence "
+                                        "that is left once slow noise is allowed for."),
     "heldout": ("held-out gain", "How much better (in %) the model with the effect predicts the part of the "
                                  "record it was not fitted on. An effect that only fits noise gains nothing "
                                  "there; it must gain more than {min_holdout_gain:g} %. An effect whose trace lies "
@@ -803,6 +952,15 @@ _DIAGNOSIS_SETTINGS = {
 }
 
 
+def _candidate_row(r, verdict: str, why: str) -> tuple:
+    """A candidate's row of the report's tables (header: see :func:`diagnosis_html`)."""
+    pars = "; ".join(f"{k} = {_value_words(v['value'], v['stderr'], k in r.not_identifiable, v['unit'])}"
+                     for k, v in r.parameters.items() if k in _effect_params(r.effect))
+    return (r.effect, _bic_text(r.delta_bic), _bic_text(r.delta_bic_corrected), _signed(r.holdout_gain),
+            _fit_text(r.fit_percent.get("current_A", math.nan)), pars or "-",
+            f"{verdict}: {why}" + (". On bound: " + ", ".join(r.on_bound)) * bool(r.on_bound))
+
+
 def diagnosis_html(d, figs=None) -> str:
     """Return the report of a fitted diagnosis as one self-contained HTML page.
 
@@ -835,25 +993,30 @@ def diagnosis_html(d, figs=None) -> str:
                                  on_bound=fc.on_bound_))
     parts.append("<h2>Candidates</h2>")
     parts.append(figure_block(f_rank, "ranking", "Green: supported (both tests passed); grey: not supported. "
-                              "Dotted lines: the thresholds."))
+                              "Left: dBIC, plain (solid) and whitened (hatched), the round-1 table's two dBIC "
+                              "columns. Dotted lines: the thresholds."))
+    order = greedy_order(d)
+    header = ["effect", "dBIC", "whitened dBIC", "held-out gain [%]", "current fit [%]", "effect parameters",
+              "verdict and why"]
     for i, rnd in enumerate(d.rounds_):
         parts.append(f"<h3>Round {i + 1}: against " + esc("the calibrated base" if i == 0 else
-                                                          "base + " + ", ".join(d.selected_[:i])) + "</h3>")
-        rows, sel = [], set()
-        for j, r in enumerate(rnd):
-            if r.supported and j == 0:
-                sel.add(j)
-            pars = "; ".join(f"{k} = {_value_words(v['value'], v['stderr'], k in r.not_identifiable, v['unit'])}"
-                             for k, v in r.parameters.items() if k in _effect_params(r.effect))
-            rows.append((r.effect, f"{r.delta_bic:.1f}", _signed(r.holdout_gain),
-                         f"{r.fit_percent.get('current_A', math.nan):.1f}", pars or "-",
-                         ("on bound: " + ", ".join(r.on_bound) + ". ") * bool(r.on_bound)
-                         + ("supported" if r.supported else r.reason)))
-        parts.append(table(["effect", "dBIC", "held-out gain [%]", "current fit [%]", "effect parameters",
-                            "verdict"], rows, left=1, selected=sel, wrap=(4, 5)))
-    parts.append("<h2>What the final model still misses</h2><p>" + esc(d.signature_["text"]) + "</p>")
-    warnings = ([("Unexplained", d.unexplained_["text"])] if d.unexplained_ else []) + [
-        ("Caution", c) for c in d.caveats_]
+                                                          "base + " + ", ".join(order[:i])) + "</h3>")
+        verdicts = [candidate_verdict(d, i, r) for r in rnd]
+        rows = [_candidate_row(r, *v) for r, v in zip(rnd, verdicts)]
+        sel = {j for j, (v, _) in enumerate(verdicts) if v == "added"}
+        parts.append(table(header, rows, left=1, selected=sel, wrap=(5, 6)))
+    removed = getattr(d, "removed_", None) or []
+    if removed:
+        parts.append("<h3>Backward check: effects removed</h3><p>Each judged as if added to the model without it "
+                     "(the dBICs of keeping it).</p>")
+        parts.append(table(header, [_candidate_row(r, "removed", r.reason) for r in removed], left=1,
+                           wrap=(5, 6)))
+    # the whole account once, a sentence a paragraph; the warning at the top names what it suggests
+    misses = (d.unexplained_ or d.signature_)["text"]
+    parts.append("<h2>What the final model still misses</h2>"
+                 + "".join(f"<p>{esc(x)}</p>" for x in re.split(r"(?<=\.) (?=[A-Za-z])", misses)))
+    warnings = ([("Unexplained", f"{d.unexplained_['hint']} (the whole account: \"What the final model still "
+                                 "misses\" below)")] if d.unexplained_ else []) + [("Caution", c) for c in d.caveats_]
     return report_page(f"Diagnosis of {record_name_of(d.measurement_.source)}", diagnosis_plain_headline(d), parts,
                        warnings=warnings, terms=("fit", "dbic", "heldout", "cautions", "uncertainty", "sigma"),
                        values={"min_delta_bic": d.min_delta_bic, "min_holdout_gain": d.min_holdout_gain,

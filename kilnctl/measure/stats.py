@@ -2,6 +2,13 @@
 
 Plain functions on arrays, so that each can be tested against a hand
 computation; :mod:`kilnctl.measure.compare` assembles them.
+
+Records from a historian have a jittered time base and dropped samples.  The
+correlations and the spectrum take the sample times ``t`` for them; their lags
+and frequencies are then in steps of the median sample step (see
+:func:`median_step`): the correlations pair the samples by their time
+difference (:func:`autocorr`), the spectrum interpolates onto a uniform grid
+(:func:`residual_spectrum`).
 """
 
 from __future__ import annotations
@@ -10,8 +17,10 @@ import math
 
 import numpy as np
 
+from ..errors import ParameterError
+
 __all__ = ["fit_percent", "autocorr", "crosscorr", "residual_spectrum", "failing_intervals", "best_step",
-           "robust_sigma", "Z99"]
+           "robust_sigma", "median_step", "Z99"]
 
 #: two-sided 99 % quantile of the standard normal distribution
 Z99 = 2.5758293035489
@@ -57,32 +66,111 @@ def _corr_lags(a, b, max_lag):
     return out / den if den > 0 else np.zeros_like(out)
 
 
-def autocorr(e, max_lag: int) -> dict:
+def median_step(t) -> float:
+    """The median sample step of a time base [s]: the lag and frequency step of the statistics on it.
+
+    Parameters
+    ----------
+    t : array_like
+        Sample times [s], increasing, at least two.
+
+    Returns
+    -------
+    float
+    """
+    return float(np.median(np.diff(np.asarray(t, float))))
+
+
+def _on_grid(t, dt) -> bool:
+    """Every sample within a quarter step of the grid t[0] + k dt, one per grid point.
+
+    Then every pair's lag, rounded to steps, is its index offset: the pairs are those of an even record.
+    """
+    x = (np.asarray(t, float) - t[0]) / dt
+    k = np.rint(x)
+    return bool(np.all(np.abs(x - k) < 0.25) and np.all(np.diff(k) == 1))
+
+
+def _corr_times(t, a, b, max_lag):
+    """:func:`_corr_lags` on an uneven time base: the sample pairs grouped by their time difference.
+
+    A pair (i, j) counts at lag k = round((t_i - t_j) / dt), dt the median step (lag 0: only the
+    samples with themselves, so that r_aa(0) = 1); the lag's correlation is the mean product of
+    its pairs, times 1 - |k| dt / T (T the record's span plus one step), over s_a s_b.  On an even time base every lag k holds the N - |k| pairs of the index
+    offset k and T = N dt, so this is :func:`_corr_lags` exactly (which then computes it, by FFT).
+    """
+    t = np.asarray(t, float)
+    dt = median_step(t)
+    if _on_grid(t, dt):
+        return _corr_lags(a, b, max_lag)
+    a = np.asarray(a, float) - np.mean(a)
+    b = np.asarray(b, float) - np.mean(b)
+    n = a.size
+    size = 2 * max_lag + 1
+    s = np.zeros(size)
+    cnt = np.zeros(size)
+    for m in range(n):  # index offset m: pairs (i + m, i), then (i, i + m)
+        k = np.rint((t[m:] - t[:n - m]) / dt).astype(int)
+        near = k <= max_lag
+        if not near.any():
+            break  # t increases: every further offset is farther still
+        if m:
+            near &= k > 0  # lag 0 is each sample with itself, as on an even time base
+        k = k[near]
+        s += np.bincount(max_lag + k, a[m:][near] * b[:n - m][near], size)
+        cnt += np.bincount(max_lag + k, minlength=size)
+        if m:
+            s += np.bincount(max_lag - k, b[m:][near] * a[:n - m][near], size)
+            cnt += np.bincount(max_lag - k, minlength=size)
+    lags = np.arange(-max_lag, max_lag + 1)
+    span = t[-1] - t[0] + dt
+    den = a.std() * b.std()
+    mean = np.divide(s, cnt, out=np.zeros(size), where=cnt > 0)
+    return mean * np.clip(1.0 - np.abs(lags) * dt / span, 0.0, None) / den if den > 0 else np.zeros(size)
+
+
+def _corr(a, b, max_lag, t):
+    return _corr_lags(a, b, max_lag) if t is None else _corr_times(t, a, b, max_lag)
+
+
+def autocorr(e, max_lag: int, *, t=None) -> dict:
     """Residual autocorrelation with the 99 % band of a white sequence (MATLAB ``resid``).
 
     Parameters
     ----------
     e : array_like
-        Residual, evenly sampled.
+        Residual.
     max_lag : int
         Largest lag [samples], >= 1.
+    t : array_like, optional
+        Sample times [s] of ``e``, for a time base that is not even (a
+        historian's jitter, dropped samples).  The lags are then steps of the
+        median sample step dt (:func:`median_step`): each pair of samples counts
+        at the lag nearest its time difference, and a lag's correlation is the
+        mean product of its pairs.  On an even time base this is the usual
+        estimate exactly.  Pairing the samples, rather than interpolating them
+        onto a grid, keeps white noise white: an interpolated sample mixes two
+        neighbours, which correlates white noise at the first lag (r = 0.27
+        measured for random steps of 0.7-1.3 times the median, against a
+        99 % band of 0.04 for 4000 samples) and flags it as coloured.
 
     Returns
     -------
     dict
-        ``lags`` (0..max_lag) [samples], ``r`` (r[0] = 1), ``band``
-        (2.576/sqrt(N)), ``n_outside`` (lags 1..max_lag outside the band) and
-        ``fraction_outside``; about 1 % of the lags of white noise fall outside.
+        ``lags`` (0..max_lag) [samples; times dt with ``t``], ``r`` (r[0] = 1),
+        ``band`` (2.576/sqrt(N), N the number of samples), ``n_outside`` (lags
+        1..max_lag outside the band) and ``fraction_outside``; about 1 % of the
+        lags of white noise fall outside.
     """
     e = np.asarray(e, float)
-    r = _corr_lags(e, e, max_lag)[max_lag:]
+    r = _corr(e, e, max_lag, t)[max_lag:]
     band = Z99 / math.sqrt(e.size)
     out = int(np.sum(np.abs(r[1:]) > band))
     return {"lags": np.arange(max_lag + 1), "r": r, "band": band, "n_outside": out,
             "fraction_outside": out / max_lag}
 
 
-def crosscorr(e, u, max_lag: int) -> dict:
+def crosscorr(e, u, max_lag: int, *, t=None) -> dict:
     """Cross-correlation of a residual with a signal, with a 99 % band.
 
     The band is the one MATLAB's ``resid`` uses for correlated signals:
@@ -97,18 +185,22 @@ def crosscorr(e, u, max_lag: int) -> dict:
         Input or other channel, same samples.
     max_lag : int
         Largest lag [samples] either way.
+    t : array_like, optional
+        Sample times [s] of both, for a time base that is not even: the lags
+        are then steps of the median sample step (as in :func:`autocorr`).
 
     Returns
     -------
     dict
-        ``lags`` (-max_lag..max_lag) [samples; positive: e after u], ``r``,
-        ``band``, ``n_outside``, ``fraction_outside``.
+        ``lags`` (-max_lag..max_lag) [samples, times the median step with
+        ``t``; positive: e after u], ``r``, ``band``, ``n_outside``,
+        ``fraction_outside``.
     """
     e = np.asarray(e, float)
     u = np.asarray(u, float)
-    r = _corr_lags(e, u, max_lag)
-    ree = _corr_lags(e, e, max_lag)
-    ruu = _corr_lags(u, u, max_lag)
+    r = _corr(e, u, max_lag, t)
+    ree = _corr(e, e, max_lag, t)
+    ruu = _corr(u, u, max_lag, t)
     P = max(float(np.sum(ree * ruu)), 1.0)
     band = Z99 * math.sqrt(P / e.size)
     out = int(np.sum(np.abs(r) > band))
@@ -116,18 +208,34 @@ def crosscorr(e, u, max_lag: int) -> dict:
             "fraction_outside": out / r.size}
 
 
-def residual_spectrum(e, fs: float, seconds: float = 10.0) -> dict:
+def residual_spectrum(e, fs: float | None = None, seconds: float = 10.0, *, t=None) -> dict:
     """Power spectral density of a residual by Welch's method.
 
     Parameters
     ----------
     e : array_like
         Residual [unit].
-    fs : float
-        Sampling frequency [Hz].
+    fs : float, optional
+        Sampling frequency [Hz] of an evenly sampled ``e``.  Give it or ``t``.
     seconds : float, default 10.0
         Segment length [s] (frequency resolution 1/seconds Hz), cut to the
         record.
+    t : array_like, optional
+        Sample times [s] of ``e``, even or not (a historian's jitter, dropped
+        samples).  ``e`` is then interpolated linearly onto the uniform grid
+        at the median sample step dt (:func:`median_step`), and fs = 1/dt.
+        Interpolation keeps Welch's estimate, averaged over segments, and with
+        it the narrow-band ratio below and the thresholds set on it for even
+        records; a Lomb-Scargle periodogram handles an uneven time base
+        without it, but is one unaveraged periodogram whose bins scatter by
+        their own size (chi-square with two degrees of freedom), which the
+        narrow-band ratio would read as peaks.  An interpolated value a
+        fraction a of a step after a sample is (1 - a) e_k + a e_(k+1): a
+        frequency f keeps at least cos(pi f dt) of its amplitude (a = 1/2),
+        more than 0.95 below fs/10 and 0.8 at fs/5, where the residual's
+        oscillations of interest lie; white noise loses up to half its power
+        at the interpolated points.  On an even time base the grid is the
+        samples themselves.
 
     Returns
     -------
@@ -138,10 +246,24 @@ def residual_spectrum(e, fs: float, seconds: float = 10.0) -> dict:
         most from its neighbours (PSD over the larger of the medians of the
         8 bins on either side, the adjacent ones excluded).  Smooth (coloured) noise gives a
         narrow-band ratio of a few units; an oscillation gives far more.
+
+    Raises
+    ------
+    ParameterError
+        When neither or both of ``fs`` and ``t`` are given.
     """
     from scipy.signal import welch
 
+    if (fs is None) == (t is None):
+        raise ParameterError("residual_spectrum: give the sampling frequency fs [Hz] of an evenly sampled residual "
+                             "or its sample times t [s], not " + ("neither" if fs is None else "both"))
     e = np.asarray(e, float)
+    if t is not None:
+        t = np.asarray(t, float)
+        dt = median_step(t)
+        fs = 1.0 / dt
+        grid = t[0] + dt * np.arange(int(np.floor((t[-1] - t[0]) / dt + 1e-9)) + 1)
+        e = np.interp(grid, t, e)
     nper = int(min(e.size, max(16, 2 ** round(math.log2(max(seconds * fs, 16))))))
     f, psd = welch(e, fs=fs, nperseg=nper, detrend="constant")
     lo = 2 if f.size > 4 else 1
