@@ -78,7 +78,7 @@ def test_whitening_filter_turns_coloured_noise_white():
     # truth: white noise plus first-order autoregressive noise (phi = 0.95, the benchmark's 0.4 s at 50 Hz) has
     # lag-1 autocorrelation 0.5 * 0.95; after the fitted filter the autocorrelation of lags 1-50 lies within
     # the 99 % band of white noise (2.576 / sqrt(N)) but for about 1 % of them
-    from kilnctl.measure.diagnose import noise_filter, whiten
+    from kilnctl.measure.evidence import noise_filter, whiten
     from kilnctl.measure.stats import autocorr
 
     rng = np.random.default_rng(5)

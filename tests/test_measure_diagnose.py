@@ -13,7 +13,8 @@ import pytest
 
 from kilnctl import Parameters
 from kilnctl.errors import ModelError, NotFittedError
-from kilnctl.measure.diagnose import Diagnosis, variance_inflation
+from kilnctl.measure.diagnose import Diagnosis
+from kilnctl.measure.evidence import variance_inflation
 from kilnctl.measure.synthetic import DEFAULT_GAINS, make_record
 
 SETUP = Parameters(DEFAULT_GAINS)
@@ -371,7 +372,7 @@ def test_a_breakaway_a_few_milliseconds_off_is_timing_not_a_failure():
     altogether is a failure whatever the shift."""
     import numpy as np
 
-    from kilnctl.measure.diagnose import EVENT_TIMING_S, _timing_only
+    from kilnctl.measure.signature import EVENT_TIMING_S, _timing_only
 
     t = np.arange(0.0, 4.0, 0.005)
     measured = np.where(t >= 2.0, 800.0, 600.0)
@@ -390,7 +391,7 @@ def test_fit_points_of_an_interval_equal_the_fit_gained_by_removing_it():
     interval's residual."""
     import numpy as np
 
-    from kilnctl.measure.diagnose import fit_points
+    from kilnctl.measure.signature import fit_points
     from kilnctl.measure.stats import fit_percent
 
     rng = np.random.default_rng(4)
@@ -432,7 +433,7 @@ def test_a_current_offset_at_standstill_is_reported_and_a_clean_record_says_noth
     once with +25 A added to every current sample (a sensor offset) and once without."""
     import numpy as np
 
-    from kilnctl.measure.diagnose import standstill_offsets
+    from kilnctl.measure.signature import standstill_offsets
     from kilnctl.measure.io import Measurement
 
     m, _ = make_record((), seed=1, t_end=12.0)

@@ -40,29 +40,21 @@ from ..errors import KilnctlError, ModelError, NotFittedError, close_matches_hin
 from ..params import Parameters
 from ..simulate import resolve_gains
 from .calibrate import Calibration, Smoothing, default_starts, holdout_masks
-from .compare import Comparison, compare_run
+from .compare import compare_run
 from .effects import CATALOGUE, DEFAULT_CALIBRATE, effect_components, grid_starts
 from .io import Measurement
-from .runner import CHANNELS, kiln_angle
-from .stats import best_step, failing_intervals, fit_percent, robust_sigma
+from .evidence import holdout_z, whitened_delta_bic
+from .runner import CHANNELS
+from .signature import residual_signature, standstill_offsets
+from .stats import failing_intervals, fit_percent
 from . import report as _report
 from .report import format_fit as _fmt_fit, json_number as _num, unit_of as _unit
 
 __all__ = ["Diagnosis", "CandidateResult", "residual_signature", "caution_texts", "DEFAULT_CALIBRATE"]
 
-#: a residual spectral peak this many times its neighbours is an oscillation the model misses
-NARROWBAND_RATIO = 10.0
 #: a refit of the current structure from a candidate's base values replaces the current model when it lowers
 #: the cost by more than this fraction [-] (see Diagnosis._reanchor)
 REANCHOR_GAIN = 1e-3
-#: a brief residual excursion that a time shift of the model's signal by at most this [s] removes is an event
-#: the model has, a little off in time (the documented event accuracy of a simulation is about a millisecond;
-#: a breakaway's time also moves with the noise on the torque that triggers it), not a missing effect
-EVENT_TIMING_S = 0.02
-#: a failing interval is named as structure the model misses when its residual costs the channel at least this
-#: many points of fit % [percentage points] (a fifth of the one point within which a diagnosis should reach the
-#: fit of the true structure)
-MATERIAL_FIT_POINTS = 0.2
 
 
 @dataclass
@@ -164,7 +156,7 @@ class Diagnosis:
     holdout_z : float, default 2.0
         ... or else, with BIC falling by more than ``min_delta_bic`` also
         when the residual's coloured noise is modelled (see
-        :func:`noise_filter`), not raise the held-out error by more than this
+        :func:`~kilnctl.measure.evidence.noise_filter`), not raise the held-out error by more than this
         many standard errors [-] (which allow for its autocorrelation), nor
         by more than ``min_holdout_gain`` %.
     max_effects : int, default 3
@@ -683,13 +675,13 @@ class Diagnosis:
                        for c in CHANNELS)
 
         gain = 100.0 * (1.0 - sse(cal.run_) / max(sse(current.run_), 1e-300))
-        gain_z = _holdout_z(m, cal, current, exp, te, scales)
+        gain_z = holdout_z(m, cal, current, exp, te, scales)
         hfit = {c: fit_percent(m.channels[c][active][te], cal.run_.outputs[c][te]) for c in CHANNELS}
         # how much of the candidate's change to the model output falls in the held-out part
         change = {c: ((cal.run_.outputs[c] - current.run_.outputs[c]) / scales[c]) ** 2 for c in CHANNELS}
         total = sum(float(v.sum()) for v in change.values())
         seen = sum(float(v[te].sum()) for v in change.values()) / total if total > 0 else 0.0
-        dbic_corr = _corrected_delta_bic(m, cal, current, exp, train)
+        dbic_corr = whitened_delta_bic(m, cal, current, exp, train)
         # the evidence: BIC on the fitting part, and the prediction of the samples the refit did not see.  An
         # effect whose trace lies mostly in the fitting part (events: a torsional ring after each breakaway)
         # gains little on the held-out part; it is supported when the BIC with the coloured noise modelled
@@ -1078,353 +1070,3 @@ def caution_texts(effect: str, span_s: float, period_s: float | None, short_reco
                 "effects (a few-millisecond sensor lag, a stiff drive train) are often like this, but so is an "
                 "effect that fits slow noise."]
     return []
-
-
-def standstill_offsets(m: Measurement, exp, *, min_samples: int = 10) -> list[dict]:
-    """Offsets of the current and speed signals while the drive stands still before the start-up.
-
-    Before the ramp the model's current and speed are zero; a record whose samples at rest read otherwise
-    has a sensor offset (or a current at rest that no catalogued effect makes, e.g. a holding torque).  An
-    effect that adds a constant torque once the kiln turns (motor-side Coulomb friction, a drag) can stand in
-    for a current offset over the rest of the record, so the user is told.  Counted: the samples before
-    ``t0 - 0.05 s`` whose measured speed is below 1 % of the final reference; an offset is reported when its
-    median is more than 5 standard errors (allowing for the noise's autocorrelation, see
-    :func:`variance_inflation`) and more than 0.5 % of the channel's peak from zero.
-
-    Parameters
-    ----------
-    m : Measurement
-        The record.
-    exp : Experiment
-        Its experiment (start ``t0`` [s], ``omega_ref`` [rpm]).
-    min_samples : int, default 10
-        Fewer samples at rest than this: nothing is said.
-
-    Returns
-    -------
-    list of dict
-        Per offset channel: ``channel``, ``offset`` [A or rpm], ``n_samples``, ``text``.
-    """
-    rest = (m.t < exp.t0 - 0.05) & (np.abs(m.speed) < 0.01 * max(abs(exp.omega_ref), 1e-9))
-    n = int(rest.sum())
-    if n < min_samples:
-        return []
-    out = []
-    for c, unit, what in (("current_A", "A", "current"), ("speed_rpm", "rpm", "speed")):
-        x = m.channels[c][rest]
-        med = float(np.median(x))
-        sig = robust_sigma(x - med)
-        se = sig * math.sqrt(variance_inflation(x - med) / n) if sig > 0 else 0.0
-        peak = float(np.max(np.abs(m.channels[c])))
-        if abs(med) > 5.0 * se and abs(med) > 0.005 * peak:
-            out.append({"channel": c, "offset": med, "n_samples": n,
-                        "text": (f"the {what} reads {med:+.3g} {unit} at standstill before the start ({n} samples, "
-                                 f"noise {sig:.2g} {unit}) where the model has zero: a sensor offset, or a {what} "
-                                 "at rest that no catalogued effect makes")})
-    return out
-
-
-def variance_inflation(e, max_lag: int | None = None) -> float:
-    """Variance inflation of a sum of autocorrelated residuals: 1 + 2 sum_k rho_k.
-
-    The sum runs over the initial positive run of the autocorrelation (Geyer's
-    initial positive sequence); 1 for white noise, (1 + phi)/(1 - phi) for
-    first-order autoregressive noise.
-
-    Parameters
-    ----------
-    e : array_like
-        Residual, evenly sampled.
-    max_lag : int, optional
-        Largest lag [samples] (default N/4).
-
-    Returns
-    -------
-    float
-        >= 1.
-    """
-    from .stats import autocorr
-
-    e = np.asarray(e, float)
-    L = max(1, min(e.size // 4, max_lag or e.size // 4))
-    r = autocorr(e - e.mean(), L)["r"][1:]
-    neg = np.nonzero(r <= 0)[0]
-    r = r[: neg[0]] if neg.size else r
-    return float(max(1.0, 1.0 + 2.0 * r.sum()))
-
-
-def noise_filter(e, max_order: int = 25) -> np.ndarray:
-    """Whitening filter of a residual: the autoregressive model e_t = sum_k a_k e_(t-k) + w_t that BIC chooses.
-
-    Yule-Walker estimates of every order up to ``max_order``; the order with
-    the lowest n ln(sigma_w^2) + p ln(n) is kept.  Applied as
-    ``w = e - sum_k a_k e_(t-k)`` (:func:`whiten`), it turns coloured
-    measurement noise into nearly white noise.
-
-    Parameters
-    ----------
-    e : array_like
-        Residual, evenly sampled [any unit].
-    max_order : int, default 25
-        Largest order [samples].
-
-    Returns
-    -------
-    ndarray
-        Coefficients a_1..a_p [-] (empty for white noise).
-    """
-    from scipy.linalg import solve_toeplitz
-
-    e = np.asarray(e, float) - float(np.mean(e))
-    n = e.size
-    p_max = max(0, min(max_order, n // 10))
-    if p_max == 0 or not np.any(e):
-        return np.zeros(0)
-    r = np.array([e[: n - k] @ e[k:] for k in range(p_max + 1)]) / n
-    best, best_crit = np.zeros(0), n * math.log(max(r[0], 1e-300))
-    for p in range(1, p_max + 1):
-        a = solve_toeplitz(r[:p], r[1: p + 1])
-        s2 = r[0] - a @ r[1: p + 1]
-        crit = n * math.log(max(s2, 1e-300 * r[0], 1e-300)) + p * math.log(n)
-        if crit < best_crit:
-            best, best_crit = a, crit
-    return best
-
-
-def whiten(e, a) -> np.ndarray:
-    """Apply a whitening filter from :func:`noise_filter`: w_t = e_t - sum_k a_k e_(t-k) (w_t = e_t for t < p)."""
-    e = np.asarray(e, float)
-    w = e.copy()
-    for k, ak in enumerate(a, start=1):
-        w[k:] -= ak * e[:-k]
-    return w
-
-
-def _holdout_z(m, cal, current, exp, te, scales) -> float:
-    """The held-out gain in units of its standard error: sum of d_i = e_cur,i^2 - e_cand,i^2 (scaled, both
-    channels) over the held-out samples, divided by sqrt(N var(d) f), f the variance inflation of the series d
-    (:func:`variance_inflation`: neighbouring samples of coloured noise are not independent evidence)."""
-    active = m.t >= exp.t0 - 1e-9
-    d = 0.0
-    for c in CHANNELS:
-        y = m.channels[c][active]
-        d = d + ((y - current.run_.outputs[c]) ** 2 - (y - cal.run_.outputs[c]) ** 2) / scales[c] ** 2
-    d = d[te]
-    if d.size < 10 or not np.any(d):
-        return 0.0
-    se = math.sqrt(d.size * float(np.var(d)) * variance_inflation(d, max_lag=max(1, d.size // 10)))
-    return float(np.sum(d) / se) if se > 0 else 0.0
-
-
-def _corrected_delta_bic(m, cal, current, exp, train) -> float:
-    """delta BIC of the two models with the coloured noise modelled (feasible generalised least squares).
-
-    Coloured noise makes neighbouring residuals nearly repeat each other, and an ordinary BIC counts each as
-    new evidence: a slow change of the model (a drift, an offset over the ramp) then looks far better supported
-    than it is.  Per channel, an autoregressive noise model (:func:`noise_filter`) is estimated from the
-    residual of the model that fits that channel better on the fitting part (the closer estimate of the
-    noise: the other one still holds what it misses), both residuals pass through that one whitening filter,
-    and BIC compares the whitened sums of squares on the fitting part.  A filter estimated from each model's
-    own residual would let a model's misfit pass for noise (a step the model misses looks like slow noise);
-    one estimated always from the candidate's would let a candidate that fits worse choose the yardstick.
-    """
-    active = m.t >= exp.t0 - 1e-9
-    tr = train[active]
-    val, n_tot = 0.0, 0
-    for c in CHANNELS:
-        y = m.channels[c][active]
-        e_new, e_old = y - cal.run_.outputs[c], y - current.run_.outputs[c]
-        ref = e_new if float(e_new[tr] @ e_new[tr]) <= float(e_old[tr] @ e_old[tr]) else e_old
-        a = noise_filter(ref)
-        w_new, w_old = whiten(e_new, a)[tr], whiten(e_old, a)[tr]
-        val += tr.sum() * math.log(max(float(w_new @ w_new), 1e-300) / max(float(w_old @ w_old), 1e-300))
-        n_tot += int(tr.sum())
-    k_new = len(cal.values_) - len(current.values_)
-    return float(val + k_new * math.log(max(n_tot, 2)))
-
-
-
-# --- residual signature --------------------------------------------------------------------------
-def fit_points(measured, residual, where) -> float:
-    """Points of fit % that the residual on ``where`` costs a channel.
-
-    With fit = 100 (1 - ||e|| / ||y - mean(y)||), the fit the channel would have if the residual on
-    ``where`` were zero, minus its fit.
-
-    Parameters
-    ----------
-    measured, residual : ndarray
-        Measured signal and residual (measured - model) [unit].
-    where : ndarray of bool
-        The samples (e.g. a failing interval).
-
-    Returns
-    -------
-    float
-        [percentage points], >= 0.
-    """
-    y = np.asarray(measured, float)
-    e = np.asarray(residual, float)
-    dev = float(np.linalg.norm(y - y.mean()))
-    if dev == 0.0:
-        return 0.0
-    total = float(e @ e)
-    rest = total - float(e[where] @ e[where])
-    return 100.0 * (math.sqrt(total) - math.sqrt(max(rest, 0.0))) / dev
-
-
-def _timing_only(t, measured, model, where, limit: float) -> bool:
-    """True when the model's signal shifted in time by at most :data:`EVENT_TIMING_S` (at least one sample)
-    brings every residual in ``where`` (a brief failing interval) within ``limit``.
-
-    Parameters
-    ----------
-    t : ndarray
-        Times [s] (uniform or not).
-    measured, model : ndarray
-        Signals at ``t``.
-    where : ndarray of bool
-        The samples of the interval.
-    limit : float
-        Largest residual that counts as explained [unit of the signal].
-
-    Returns
-    -------
-    bool
-    """
-    idx = np.flatnonzero(where)
-    if idx.size == 0:
-        return True
-    dt = float(np.median(np.diff(t))) if t.size > 1 else 0.0
-    span = max(EVENT_TIMING_S, dt * 1.01)
-    for shift in np.linspace(-span, span, 2 * max(1, int(np.ceil(span / max(dt, 1e-9)))) * 4 + 1):
-        shifted = np.interp(t[idx] - shift, t, model)
-        if float(np.max(np.abs(measured[idx] - shifted))) <= limit:
-            return True
-    return False
-
-
-def residual_signature(comp: Comparison, n: float, steady_from: float | None = None) -> dict:
-    """Describe what a model still misses: frequency, correlations, where.
-
-    The current residual is regressed on signals that name kinds of physics:
-    the kiln angle (sin and cos: a once-per-revolution torque), the motor
-    speed (drag), the acceleration (inertia), the speed error (controller or
-    sensor), the current itself (limits, sensor scale).  The residual "has
-    structure" when one of these explains more than 25 % of its variance,
-    when its spectrum has a narrow peak (more than NARROWBAND_RATIO x its
-    neighbours), or when it exceeds 3 sigma for 0.5 s or more, or 5 sigma
-    anywhere unless a shift of the model's signal by EVENT_TIMING_S removes
-    it (an event the model has, a little off in time).  A correlation or a
-    failing interval counts only when it costs the channel at least
-    MATERIAL_FIT_POINTS of fit % (:func:`fit_points`).
-
-    Parameters
-    ----------
-    comp : Comparison
-        Comparison of the final model with the record.
-    n : float
-        Total reduction motor to kiln [-] (for the kiln angle).
-    steady_from : float, optional
-        Time from which the drive runs at its set speed [s] (record time):
-        from there on the best single step of the residual is a further
-        regressor (no catalogued effect makes one; a load step or a process
-        upset does).
-
-    Returns
-    -------
-    dict
-        ``structured`` (bool), ``dominant_hz`` [Hz], ``peak_ratio``,
-        ``rms_A`` [A], ``r2`` (variance explained by each regressor [-]),
-        ``strongest``, ``failing`` (texts), ``hint`` and ``text``.
-    """
-    ch = comp.channels["current_A"]
-    e = ch.residual - ch.residual.mean()
-    t = comp.t
-    speed = comp.channels["speed_rpm"].measured
-    theta = kiln_angle(t, speed, n)
-    dt = comp.dt
-    win = max(1, int(round(0.25 / dt)))
-    sm = np.convolve(speed, np.ones(win) / win, mode="same")
-    accel = np.gradient(sm, t)
-    ref = comp.extra.get("model_outputs", {}).get("speed_ref_rpm")
-    regs = {
-        "kiln angle (once per revolution)": np.column_stack([np.sin(theta), np.cos(theta)]),
-        "speed": speed[:, None],
-        "acceleration": accel[:, None],
-        "current": comp.channels["current_A"].measured[:, None],
-    }
-    if ref is not None:
-        regs["speed error"] = (ref - speed)[:, None]
-    r2 = {}
-    var = float(e @ e)
-    for k, X in regs.items():
-        X = np.column_stack([np.ones(t.size), X - X.mean(axis=0)])
-        beta, *_ = np.linalg.lstsq(X, e, rcond=None)
-        res = e - X @ beta
-        r2[k] = float(1.0 - (res @ res) / var) if var > 0 else 0.0
-    step = best_step(t, e, t_min=steady_from, t_max=t[-1] - 2.0) if steady_from is not None else None
-    step_key = None
-    if step is not None and var > 0:
-        step_key = f"an abrupt change at t = {step['t']:.1f} s"
-        r2[step_key] = float(1.0 - step["rss"] / var)
-    strongest = max(r2, key=r2.get)
-    spec = ch.spectrum
-    # a failing interval counts when it lasts (>= 0.5 s) or goes far out (> 5 sigma): a coloured-noise
-    # excursion beyond 3 sigma is brief and rarely reaches 5
-    # A brief one that the model's own signal, shifted by at most EVENT_TIMING_S (or one sample), explains
-    # within 5 sigma is an event the model has, a few milliseconds off (a stick-slip breakaway or re-stick
-    # between two samples of a steep edge), not missing physics.
-    # Either way it must matter: an interval whose residual costs less than MATERIAL_FIT_POINTS of the
-    # channel's fit % (1 rpm off for two seconds of a 500 rpm ramp) is reported in the comparison, not as
-    # structure the model misses.
-    fails = []
-    for key, label in (("current_A", ""), ("speed_rpm", "speed: ")):
-        c = comp.channels[key]
-        for f in c.failing:
-            sl = (t >= f["t_start"]) & (t <= f["t_end"])
-            peak = float(np.max(np.abs(c.residual[sl]))) if sl.any() else 0.0
-            lasting = f["t_end"] - f["t_start"] >= 0.5
-            if not (lasting or (peak > 5.0 * c.sigma and not _timing_only(t, c.measured, c.model, sl,
-                                                                             5.0 * c.sigma))):
-                continue
-            if fit_points(c.measured, c.residual, sl) >= MATERIAL_FIT_POINTS:
-                fails.append(label + f["text"])
-    peaked = spec["narrowband_ratio"] > NARROWBAND_RATIO and spec["narrowband_hz"] > 0.05
-    # a regressor that explains a quarter of the residual names structure when that part matters (see above)
-    y = ch.measured
-    dev = float(np.linalg.norm(y - y.mean()))
-    explained = (100.0 * math.sqrt(var) * (1.0 - math.sqrt(max(1.0 - r2[strongest], 0.0))) / dev
-                 if dev > 0 else 0.0)
-    correlated = r2[strongest] > 0.25 and explained >= MATERIAL_FIT_POINTS
-    structured = bool(correlated or peaked or fails)
-    hints = {
-        "kiln angle (once per revolution)": "a torque that repeats with each kiln revolution (unbalance, shell "
-                                            "crank, girth-gear run-out)",
-        "speed": "a torque that grows with speed (drag, fan or seal load)",
-        "acceleration": "a missing inertia or a torque proportional to acceleration (a coupled motor, flywheel)",
-        "current": "something that depends on the current level (a limit, saturation, sensor scale)",
-        "speed error": "a controller or speed-sensor difference (gains, filter, lag)",
-    }
-    if step_key is not None:
-        hints[step_key] = (f"a change outside the catalogue: a step of {step['size']:+.0f} A in the current at "
-                           f"t = {step['t']:.1f} s while the drive runs at its set speed (a load step, a process "
-                           "upset, a sensor fault)")
-    if peaked and not correlated:
-        hint = (f"an oscillation near {spec['narrowband_hz']:.2f} Hz: a resonance (torsional mode, burden "
-                f"pendulum near 0.34 Hz) or a loop that is less damped than modelled")
-    elif correlated:
-        hint = hints[strongest]
-    elif fails:
-        hint = "a local failure: " + fails[0]
-    else:
-        hint = "no structure beyond noise"
-    text = (f"current residual rms {ch.rms:.3g} A; dominant frequency {spec['dominant_hz']:.2f} Hz; "
-            f"sharpest spectral peak {spec['narrowband_hz']:.2f} Hz ({spec['narrowband_ratio']:.1f} x its "
-            "neighbours); variance explained by "
-            + ", ".join(f"{k} {100 * v:.0f} %" for k, v in sorted(r2.items(), key=lambda kv: -kv[1]))
-            + (f"; fails at {'; '.join(fails)}" if fails else "") + f". Suggests: {hint}.")
-    return {"structured": structured, "dominant_hz": spec["dominant_hz"], "peak_ratio": spec["peak_ratio"],
-            "narrowband_hz": spec["narrowband_hz"], "narrowband_ratio": spec["narrowband_ratio"],
-            "rms_A": ch.rms, "sigma_A": robust_sigma(ch.residual), "r2": r2, "strongest": strongest,
-            "failing": fails, "hint": hint, "text": text}

@@ -21,7 +21,6 @@ It may carry one extra section, ``[measurement]``, read by this module only
 
 from __future__ import annotations
 
-import csv
 import math
 import re
 import tomllib
