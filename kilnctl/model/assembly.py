@@ -305,6 +305,9 @@ class Plant:
                     raise ModelError(f"component {nm!r} needs component {req!r}: add it to the list")
         self.names = tuple(names)
         self.options = dict(options)
+        #: numeric parameters in the order of every mode's parameter vector, fixed when the plant is made (a
+        #: component registered later adds parameters to new plants, not to this one)
+        self.numeric_names = numeric_names()
         self.components: list[Component] = [REGISTRY[nm]() for nm in names]
         self.spec = ModelSpec()
         for c in self.components:
@@ -323,8 +326,8 @@ class Plant:
 
     # --- numeric helpers ----------------------------------------------------
     def param_vector(self, params: Parameters) -> np.ndarray:
-        """Numeric parameter vector in :func:`~kilnctl.model.base.numeric_names` order."""
-        return np.array([params[n] for n in numeric_names()], dtype=float)
+        """Numeric parameter vector in :attr:`numeric_names` order."""
+        return np.array([params[n] for n in self.numeric_names], dtype=float)
 
     def initial(self, params: Parameters) -> tuple[np.ndarray, tuple]:
         """Initial scaled state and mode at t = 0.
@@ -364,7 +367,7 @@ class Plant:
             Time symbol.
         sp : SymParams
         """
-        sp = SymParams(self.options)
+        sp = SymParams(self.options, self.numeric_names)
         xs = ca.SX.sym("xs", len(self.state_names))
         t = ca.SX.sym("t")
         x = {n: xs[i] * self.scales[i] for i, n in enumerate(self.state_names)}
@@ -458,7 +461,9 @@ class Plant:
 
 
 @lru_cache(maxsize=64)
-def _plant_cached(names: tuple, options: tuple, n_grid: int, rtol: float, atol: float) -> Plant:
+def _plant_cached(names: tuple, options: tuple, n_grid: int, rtol: float, atol: float, registry: int) -> Plant:
+    # ``registry`` (REGISTRY.version) is only part of the key: a plant made before a component was registered
+    # or replaced is not reused (its parameter vector and component classes are those of then)
     return Plant(names, dict(options), n_grid=n_grid, rtol=rtol, atol=atol)
 
 
@@ -481,4 +486,5 @@ def get_plant(names, params: Parameters, n_grid: int = 500, rtol: float = 1e-8, 
     Plant
     """
     options = tuple((k, params[k]) for k in option_names())
-    return _plant_cached(tuple(names), options, int(n_grid), float(rtol), float(atol))
+    return _plant_cached(tuple(names), options, int(n_grid), float(rtol), float(atol),
+                         getattr(REGISTRY, "version", len(REGISTRY)))
