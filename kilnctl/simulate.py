@@ -118,9 +118,14 @@ class _Engine:
         self.max_events = max_events
         self.events: list[Event] = []
         self.pairs: Counter = Counter()
-        self.t_rec: list[np.ndarray] = []
-        self.x_rec: list[np.ndarray] = []
-        self.m_rec: list[np.ndarray] = []
+        # recorded samples: times and scaled states as rows (the compiled stepper's layout, which writes into
+        # these buffers directly), the first n_rec rows used; a run of consecutive samples in one mode is a
+        # segment: its mode code and length
+        self.t_buf = np.empty(0)
+        self.x_buf = np.empty((0, len(plant.state_names)))
+        self.n_rec = 0
+        self.seg_mode: list[int] = []
+        self.seg_len: list[int] = []
         self.mode_index: dict[tuple, int] = {}
         self.n_steps = 0
 
@@ -130,27 +135,60 @@ class _Engine:
             self.mode_index[mode] = len(self.mode_index)
         return self.mode_index[mode]
 
+    def reserve(self, k: int) -> None:
+        """Make room for k more samples in the recording buffers."""
+        need = self.n_rec + int(k)
+        if need <= len(self.t_buf):
+            return
+        cap = max(need, 2 * len(self.t_buf))
+        t_buf, x_buf = np.empty(cap), np.empty((cap, self.x_buf.shape[1]))
+        t_buf[:self.n_rec], x_buf[:self.n_rec] = self.t_buf[:self.n_rec], self.x_buf[:self.n_rec]
+        self.t_buf, self.x_buf = t_buf, x_buf
+
+    def _segment(self, mf, k: int) -> None:
+        """Count k samples just written after the used rows as recorded in mode ``mf.mode``."""
+        if k == 0:
+            return
+        mid = self._mid(mf.mode)
+        if self.seg_mode and self.seg_mode[-1] == mid:
+            self.seg_len[-1] += k
+        else:
+            self.seg_mode.append(mid)
+            self.seg_len.append(k)
+        self.n_rec += k
+
     def record(self, mf, t, X):
         """Record times t (1-d) and scaled states X (nx x k) in mode ``mf.mode``."""
-        if X.shape[1] == 0:
+        k = X.shape[1]
+        if k == 0:
             return
-        self.t_rec.append(np.asarray(t, dtype=float))
-        self.x_rec.append(np.asarray(X, dtype=float))
-        self.m_rec.append(np.full(X.shape[1], self._mid(mf.mode)))
+        self.reserve(k)
+        u = self.n_rec
+        self.t_buf[u:u + k] = t
+        self.x_buf[u:u + k] = X.T
+        self._segment(mf, k)
 
     def outputs(self):
-        """Times, scaled states, mode codes and outputs of every recorded sample."""
-        T = np.concatenate(self.t_rec)
-        X = np.hstack(self.x_rec)
-        M = np.concatenate(self.m_rec)
-        Y = np.empty((len(self.plant.output_names), len(T)))
-        for mode, mid in self.mode_index.items():
+        """Times, scaled states (nx x N), mode codes and outputs (ny x N) of every recorded sample."""
+        N = self.n_rec
+        T, XR = self.t_buf[:N], self.x_buf[:N]
+        M = np.repeat(np.array(self.seg_mode, dtype=np.intp), self.seg_len)
+        Y = np.empty((N, len(self.plant.output_names)))  # rows, as the compiled outputs write them
+        modes = {mid: mode for mode, mid in self.mode_index.items()}
+        others = set()
+        a = 0
+        for mid, k in zip(self.seg_mode, self.seg_len):
+            # each sample is evaluated on its own, so one call per segment gives the numbers of one per mode
+            stepper = self.plant.functions(modes[mid]).stepper
+            if stepper is not None:
+                stepper.outputs_rows(self.P, T[a:a + k], XR[a:a + k], out=Y[a:a + k])
+            else:
+                others.add(mid)
+            a += k
+        X = XR.T
+        for mid in sorted(others):  # modes without a compiled stepper: CasADi's batched output map
             idx = np.nonzero(M == mid)[0]
-            mf = self.plant.functions(mode)
-            if mf.stepper is not None:
-                Y[:, idx] = mf.stepper.outputs(self.P, T[idx], X[:, idx])
-                continue
-            fmap = mf.output_map
+            fmap = self.plant.functions(modes[mid]).output_map
             B = fmap.size2_in(0)
             for s0 in range(0, len(idx), B):
                 sl = idx[s0:s0 + B]
@@ -159,8 +197,8 @@ class _Engine:
                 Tb = np.full(B, T[sl[-1]])
                 Xb[:, :k], Tb[:k] = X[:, sl], T[sl]
                 Xb[:, k:] = X[:, sl[-1:]]
-                Y[:, sl] = np.asarray(fmap(Xb, Tb, self.P))[:, :k]
-        return T, X, M, Y
+                Y[sl] = np.asarray(fmap(Xb, Tb, self.P))[:, :k].T
+        return T, X, M, Y.T
 
     # --- guards -------------------------------------------------------------------
     def guards(self, mf, xs, t):
@@ -327,12 +365,16 @@ class _Engine:
             nonlocal h
             if mf.stepper is None:
                 raise SimulationError("method 'ros3p' needs a C compiler (gcc or $CC); use method='cvodes'")
+            # the stepper writes its samples straight into the recording buffers
+            self.reserve(OUTPUT_BUFFER)
+            u = self.n_rec
             r = mf.stepper.run(self.P, t, t_end, xs, dt, rtol, atol, hmax, h if h > 0 else FIRST_STEP,
-                               self.event_tol, max_out=OUTPUT_BUFFER, runaway=RUNAWAY, guard_eps=GUARD_EPS)
+                               self.event_tol, max_out=OUTPUT_BUFFER, runaway=RUNAWAY, guard_eps=GUARD_EPS,
+                               out_t=self.t_buf[u:u + OUTPUT_BUFFER], out_x=self.x_buf[u:u + OUTPUT_BUFFER])
             st = r["status"]
             if st == -6:
                 self.check_bounded(np.zeros((len(xs), 0)), r["x_ev"], r["t_ev"], mf.mode)
-            self.record(mf, r["t"], r["x"])
+            self._segment(mf, len(r["t"]))
             self.n_steps += r["n_steps"]
             if st < 0:
                 raise SimulationError(
