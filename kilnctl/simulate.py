@@ -43,6 +43,9 @@ GUARD_LOOKAHEAD = 1e-3
 #: samples the compiled stepper returns per call; when full, the run continues from the last accepted
 #: step (results do not depend on this number: tests/test_differential.py)
 OUTPUT_BUFFER = 16384
+#: mode switches the recording buffers have room for from the start (more make them grow: results do not depend
+#: on this number)
+RESERVED_EVENTS = 64
 #: default output and guard-sampling step per model [s] (the one definition: the sweeps and the measurement
 #: runner use it; the compiled stepper gets it as its output grid)
 DEFAULT_DT = {"macro": 5e-3, "micro": 1e-3}
@@ -587,6 +590,8 @@ def simulate(params: Parameters | None = None, model: str = "macro", t_end: floa
             raise SimulationError(f"initial_mode {comp!r} = {m!r}: choose one of {plant.moded[i].modes}")
         mode0 = mode0[:i] + (m,) + mode0[i + 1:]
     eng = _Engine(plant, P, event_tol, max_events)
+    # room for the grid, a few events and one stepper call's buffer: most runs never grow the buffers
+    eng.reserve(int(t_end / dt) + 2 * RESERVED_EVENTS + OUTPUT_BUFFER)
     wall0 = time.perf_counter()
     if method == "auto":
         method = "ros3p" if plant.functions(mode0).stepper is not None else "cvodes"
@@ -601,9 +606,11 @@ def simulate(params: Parameters | None = None, model: str = "macro", t_end: floa
     build = plant.build_seconds - build0
     modes = {v: k for k, v in eng.mode_index.items()}
     mode_arrays = {}
+    seg_mode = np.array(eng.seg_mode, dtype=np.intp)
     for ci, c in enumerate(plant.moded):
         labels = np.array([modes[i][ci] for i in range(len(modes))])
-        mode_arrays[c.name] = labels[code]
+        # label of each segment repeated over its samples: the same as labels[code], without a gather per sample
+        mode_arrays[c.name] = np.repeat(labels[seg_mode], eng.seg_len)
     return Response(
         t=T,
         outputs=dict(zip(plant.output_names, Y)),
