@@ -111,6 +111,12 @@ def _check_horizon(t_end, dt):
         raise SimulationError(f"dt = {dt} s exceeds t_end = {t_end} s: choose a smaller output step")
 
 
+def _initial_rows(t_end, dt) -> int:
+    """Samples the recording buffers have room for at the start: the grid, :data:`RESERVED_EVENTS` mode
+    switches (two samples each) and one stepper call's buffer, so that most runs never grow them."""
+    return int(t_end / dt) + 2 * RESERVED_EVENTS + OUTPUT_BUFFER
+
+
 class _Engine:
     """One simulation run: state, mode, recorded points and events."""
 
@@ -590,8 +596,7 @@ def simulate(params: Parameters | None = None, model: str = "macro", t_end: floa
             raise SimulationError(f"initial_mode {comp!r} = {m!r}: choose one of {plant.moded[i].modes}")
         mode0 = mode0[:i] + (m,) + mode0[i + 1:]
     eng = _Engine(plant, P, event_tol, max_events)
-    # room for the grid, a few events and one stepper call's buffer: most runs never grow the buffers
-    eng.reserve(int(t_end / dt) + 2 * RESERVED_EVENTS + OUTPUT_BUFFER)
+    eng.reserve(_initial_rows(t_end, dt))
     wall0 = time.perf_counter()
     if method == "auto":
         method = "ros3p" if plant.functions(mode0).stepper is not None else "cvodes"
