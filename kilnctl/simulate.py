@@ -40,7 +40,7 @@ __all__ = ["simulate", "resolve_gains", "plant_structure", "DEFAULT_DT"]
 #: a guard on its boundary counts as crossed at once when its rate takes it past -GUARD_EPS within
 #: this time [s]; slower (grazing) guards are left to the integrator's crossing detection
 GUARD_LOOKAHEAD = 1e-3
-#: samples the compiled stepper returns per call; when full, the run continues from the last accepted
+#: most samples the compiled stepper returns per call; when full, the run continues from the last accepted
 #: step (results do not depend on this number: tests/test_differential.py)
 OUTPUT_BUFFER = 16384
 #: mode switches the recording buffers have room for from the start (more make them grow: results do not depend
@@ -113,8 +113,25 @@ def _check_horizon(t_end, dt):
 
 def _initial_rows(t_end, dt) -> int:
     """Samples the recording buffers have room for at the start: the grid, :data:`RESERVED_EVENTS` mode
-    switches (two samples each) and one stepper call's buffer, so that most runs never grow them."""
-    return int(t_end / dt) + 2 * RESERVED_EVENTS + OUTPUT_BUFFER
+    switches (two samples each) and some slack, so that most runs never grow them."""
+    return int(t_end / dt) + 2 * RESERVED_EVENTS + 256
+
+
+def _call_rows(t, t_end, dt, hmax) -> int:
+    """Output rows to give one compiled-stepper call from time t: :data:`OUTPUT_BUFFER`, or fewer where the
+    call could not fill it.
+
+    The stepper caps its step at half its buffer (``0.5*max_out*dt``) and stops early when the buffer is
+    full, so a smaller buffer changes the integration unless both are out of reach: this gives at least
+    the grid points left after t (with a margin of 8) and at least ``2*hmax/dt + 1`` rows, and the full
+    buffer whenever the cap would bind at that size.  The buffer given is always as large as the number
+    passed, whatever these counts: they only decide whether the results are those of the full buffer.
+    """
+    if hmax > 0.5 * OUTPUT_BUFFER * dt:
+        return OUTPUT_BUFFER
+    k0 = math.floor(t / dt * (1 + 1e-14)) + 1  # first grid index after t, as rosenbrock.c counts it
+    left = math.floor(t_end * (1 + 1e-15) / dt) - k0 + 1 + 8
+    return int(min(OUTPUT_BUFFER, max(left, math.ceil(2 * hmax / dt) + 1)))
 
 
 class _Engine:
@@ -180,7 +197,7 @@ class _Engine:
     def outputs(self):
         """Times, scaled states (nx x N), mode codes and outputs (ny x N) of every recorded sample."""
         N = self.n_rec
-        T, XR = self.t_buf[:N], self.x_buf[:N]
+        T, XR = self.t_buf[:N].copy(), self.x_buf[:N]  # T is kept by the response: not a view of the buffer
         M = np.repeat(np.array(self.seg_mode, dtype=np.intp), self.seg_len)
         Y = np.empty((N, len(self.plant.output_names)))  # rows, as the compiled outputs write them
         modes = {mid: mode for mode, mid in self.mode_index.items()}
@@ -375,11 +392,12 @@ class _Engine:
             if mf.stepper is None:
                 raise SimulationError("method 'ros3p' needs a C compiler (gcc or $CC); use method='cvodes'")
             # the stepper writes its samples straight into the recording buffers
-            self.reserve(OUTPUT_BUFFER)
+            rows = _call_rows(t, t_end, dt, hmax)
+            self.reserve(rows)
             u = self.n_rec
             r = mf.stepper.run(self.P, t, t_end, xs, dt, rtol, atol, hmax, h if h > 0 else FIRST_STEP,
-                               self.event_tol, max_out=OUTPUT_BUFFER, runaway=RUNAWAY, guard_eps=GUARD_EPS,
-                               out_t=self.t_buf[u:u + OUTPUT_BUFFER], out_x=self.x_buf[u:u + OUTPUT_BUFFER])
+                               self.event_tol, max_out=rows, runaway=RUNAWAY, guard_eps=GUARD_EPS,
+                               out_t=self.t_buf[u:u + rows], out_x=self.x_buf[u:u + rows])
             st = r["status"]
             if st == -6:
                 self.check_bounded(np.zeros((len(xs), 0)), r["x_ev"], r["t_ev"], mf.mode)
@@ -606,7 +624,7 @@ def simulate(params: Parameters | None = None, model: str = "macro", t_end: floa
     else:
         advance = eng.cvodes(float(t_end), float(dt))
     eng.run(xs0, mode0, float(t_end), advance)
-    T, X, code, Y = eng.outputs()
+    T, X, _, Y = eng.outputs()
     wall = time.perf_counter() - wall0
     build = plant.build_seconds - build0
     modes = {v: k for k, v in eng.mode_index.items()}
