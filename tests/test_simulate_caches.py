@@ -209,3 +209,29 @@ def test_results_do_not_depend_on_growing_the_recording_buffers(monkeypatch):
     for k in a:
         assert np.array_equal(a[k], b[k]), k
     assert all(np.array_equal(ref.modes[c], small.modes[c]) for c in ref.modes)
+
+
+def test_the_stepper_follows_a_changed_parameter_vector():
+    # truth: the CasADi guard and projection functions (SX, not the generated C) at the same point; the stepper
+    # keeps the address of the last vector it checked, so alternating vectors (and a strided copy, which is
+    # not kept) must each give their own values
+    p = Parameters(gains="given")
+    plant = get_plant(component_names("macro"), p)
+    xs, mode = plant.initial(p)
+    mode = tuple("slip_pos" if c.name == "burden" else m for c, m in zip(plant.moded, mode))
+    mf = plant.functions(mode)
+    assert mf.stepper is not None and mf.guards
+    xs = xs + 0.01 * np.arange(1, len(xs) + 1)
+    other = p.replace(mu_c=0.2, mu_s=0.3, m_v=9e5, k_p=3.0, R_a=0.02, J_m=30.0)
+    P1, P2 = plant.param_vector(p), plant.param_vector(other)
+    wide = np.zeros((len(P2), 2))
+    wide[:, 0] = P2
+    for P in (P1, P2, P1, wide[:, 0], P2):
+        g, sel, gdot = mf.stepper.guard(P, xs, 0.7)
+        want = [np.asarray(v).ravel() for v in mf.guard(xs, 0.7, P)]
+        for got, ref in zip((g, sel, gdot), want):
+            assert np.allclose(got, ref, rtol=1e-12, atol=1e-12 * max(1.0, np.abs(ref).max()))
+        proj = np.asarray(mf.project(xs, 0.7, P)).ravel()
+        assert np.allclose(mf.stepper.project(P, xs, 0.7), proj, rtol=1e-12, atol=1e-14)
+    g1, g2 = (np.concatenate(mf.stepper.guard(P, xs, 0.7)) for P in (P1, P2))
+    assert not np.allclose(g1, g2)

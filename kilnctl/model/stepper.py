@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import ctypes
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import casadi as ca
@@ -83,9 +83,25 @@ class Stepper:
     ng: int
     ny: int
     n_p: int = -1
+    #: (P, its address) of the last parameter vector that was checked as it is: a run passes the same vector at
+    #: every call (one tuple, read and replaced whole, so threads sharing the stepper never mix two entries)
+    _last_p: tuple = field(default=(None, 0), repr=False, compare=False)
 
     def _params(self, P):
         return _vector("P", P, self.n_p) if self.n_p >= 0 else np.ascontiguousarray(P, dtype=float).ravel()
+
+    def _p_address(self, P):
+        """(array to hold during the call, its address) for parameter vector P, checked once per vector."""
+        last = self._last_p
+        if last[0] is P:  # held in _last_p, so its id cannot have been reused by another object
+            return P, last[1]
+        if (type(P) is np.ndarray and P.dtype == np.float64 and P.ndim == 1 and P.flags.c_contiguous
+                and (self.n_p < 0 or P.size == self.n_p)):
+            address = P.ctypes.data
+            self._last_p = (P, address)
+            return P, address
+        a = self._params(P)  # converted (or refused): a new array each call
+        return a, a.ctypes.data
 
     def outputs(self, P, T, X) -> np.ndarray:
         """Output signals at samples T (k,) with scaled states X (n x k); returns (ny x k)."""
@@ -105,7 +121,7 @@ class Stepper:
         X = np.ascontiguousarray(X, dtype=float)
         if X.ndim != 2 or X.shape != (len(T), self.n):
             raise SimulationError(f"compiled stepper: state rows of shape {X.shape}, expected ({len(T)}, {self.n})")
-        P = self._params(P)
+        P, p_address = self._p_address(P)
         if out is None:
             Y = np.empty((len(T), self.ny))
         elif (isinstance(out, np.ndarray) and out.dtype == np.float64 and out.shape == (len(T), self.ny)
@@ -114,7 +130,7 @@ class Stepper:
         else:
             raise SimulationError(f"compiled stepper: out must be a writeable C-contiguous float array of shape "
                                   f"({len(T)}, {self.ny})")
-        st = self.lib.kiln_outputs(self.n, self.ny, P.ctypes.data, len(T), T.ctypes.data, X.ctypes.data,
+        st = self.lib.kiln_outputs(self.n, self.ny, p_address, len(T), T.ctypes.data, X.ctypes.data,
                                    Y.ctypes.data)
         if st != 0:
             raise SimulationError(f"compiled output evaluation failed ({STATUS.get(st, st)})")
@@ -122,20 +138,21 @@ class Stepper:
 
     def guard(self, P, x, t):
         """Guards, selectors and their time derivatives at (x, t): three arrays of length ng."""
-        P, x = self._params(P), _vector("x", x, self.n)
+        P, p_address = self._p_address(P)
+        x = _vector("x", x, self.n)
         m = max(self.ng, 1)
-        buf = np.empty((3, m))
-        g, sel, gd = buf
-        if self.lib.kiln_guard(P.ctypes.data, x.ctypes.data, float(t), g.ctypes.data, sel.ctypes.data,
-                               gd.ctypes.data):
+        buf = np.empty((3, m))  # g, sel, gdot: one allocation, rows of m doubles
+        b = buf.ctypes.data
+        if self.lib.kiln_guard(p_address, x.ctypes.data, float(t), b, b + 8 * m, b + 16 * m):
             raise SimulationError("compiled guard evaluation failed")
-        return g[: self.ng], sel[: self.ng], gd[: self.ng]
+        return buf[0, : self.ng], buf[1, : self.ng], buf[2, : self.ng]
 
     def project(self, P, x, t):
         """Scaled state at time t projected onto the mode's constraints (rigid links, held current)."""
-        P, x = self._params(P), _vector("x", x, self.n)
+        P, p_address = self._p_address(P)
+        x = _vector("x", x, self.n)
         out = np.empty(self.n)
-        if self.lib.kiln_project(P.ctypes.data, x.ctypes.data, float(t), out.ctypes.data):
+        if self.lib.kiln_project(p_address, x.ctypes.data, float(t), out.ctypes.data):
             raise SimulationError("compiled projection failed")
         return out
 
@@ -197,7 +214,7 @@ class Stepper:
             out_t = np.empty(max_out)
             out_x = np.empty((max_out, self.n))
         x0 = _vector("x0", x0, self.n)
-        P = self._params(P)
+        P, p_address = self._p_address(P)
         x_ev = np.empty(self.n)
         t_ev = np.zeros(1)
         n_out = ctypes.c_int(0)
@@ -205,7 +222,7 @@ class Stepper:
         n_steps = ctypes.c_int(0)
         h_last = ctypes.c_double(0.0)
         st = self.lib.kiln_run(
-            self.n, self.ng, P.ctypes.data, ctypes.c_double(t0), ctypes.c_double(t_end),
+            self.n, self.ng, p_address, ctypes.c_double(t0), ctypes.c_double(t_end),
             x0.ctypes.data, ctypes.c_double(dt_out), ctypes.c_double(rtol), ctypes.c_double(atol),
             ctypes.c_double(hmax), ctypes.c_double(h0), ctypes.c_double(event_tol), max_out,
             out_t.ctypes.data, out_x.ctypes.data, ctypes.byref(n_out), t_ev.ctypes.data,
