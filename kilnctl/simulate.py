@@ -154,6 +154,7 @@ class _Engine:
         self.seg_len: list[int] = []
         self.mode_index: dict[tuple, int] = {}
         self.n_steps = 0
+        self.moded_index = {c.name: i for i, c in enumerate(plant.moded)}  # place of a component in a mode
 
     # --- recording ------------------------------------------------------------
     def _mid(self, mode):
@@ -201,16 +202,26 @@ class _Engine:
         M = np.repeat(np.array(self.seg_mode, dtype=np.intp), self.seg_len)
         Y = np.empty((N, len(self.plant.output_names)))  # rows, as the compiled outputs write them
         modes = {mid: mode for mode, mid in self.mode_index.items()}
-        others = set()
-        a = 0
-        for mid, k in zip(self.seg_mode, self.seg_len):
-            # each sample is evaluated on its own, so one call per segment gives the numbers of one per mode
-            stepper = self.plant.functions(modes[mid]).stepper
-            if stepper is not None:
-                stepper.outputs_rows(self.P, T[a:a + k], XR[a:a + k], out=Y[a:a + k])
-            else:
-                others.add(mid)
-            a += k
+        steppers = {mid: self.plant.functions(mode).stepper for mid, mode in modes.items()}
+        others = {mid for mid, st in steppers.items() if st is None}
+        # each sample is evaluated on its own, so the numbers do not depend on how samples are grouped into calls:
+        # one call per segment, written in place; with many more segments than modes (a run that keeps
+        # switching), one call per mode on its samples gathered by a stable sort, scattered back once
+        if len(self.seg_mode) <= 4 * len(modes) + 32:
+            a = 0
+            for mid, k in zip(self.seg_mode, self.seg_len):
+                if steppers[mid] is not None:
+                    steppers[mid].outputs_rows(self.P, T[a:a + k], XR[a:a + k], out=Y[a:a + k])
+                a += k
+        else:
+            order = np.argsort(M, kind="stable")
+            bounds = np.concatenate([[0], np.cumsum(np.bincount(M, minlength=len(modes)))])
+            Ts, Xs, Ys = T[order], XR[order], np.empty_like(Y)
+            for mid, st in steppers.items():
+                a, b = bounds[mid], bounds[mid + 1]
+                if st is not None:
+                    st.outputs_rows(self.P, Ts[a:b], Xs[a:b], out=Ys[a:b])
+            Y[order] = Ys  # rows of the modes without a stepper are filled below
         X = XR.T
         for mid in sorted(others):  # modes without a compiled stepper: CasADi's batched output map
             idx = np.nonzero(M == mid)[0]
@@ -248,8 +259,9 @@ class _Engine:
         if evaluated is None:
             return None
         g, _, gdot = evaluated
-        for j in range(len(g)):
-            if g[j] < -GUARD_EPS or (g[j] <= tol and gdot[j] * GUARD_LOOKAHEAD < -GUARD_EPS):
+        # as Python floats (the same doubles): cheaper to compare one by one than numpy scalars
+        for j, (gj, rj) in enumerate(zip(np.asarray(g).tolist(), np.asarray(gdot).tolist())):
+            if gj < -GUARD_EPS or (gj <= tol and rj * GUARD_LOOKAHEAD < -GUARD_EPS):
                 return j
         return None
 
@@ -259,8 +271,7 @@ class _Engine:
         target = gd.target
         if gd.alt_target is not None:
             target = gd.target if sel[j] >= 0 else gd.alt_target
-        names = [c.name for c in self.plant.moded]
-        i = names.index(gd.component)
+        i = self.moded_index[gd.component]
         return mode[:i] + (target,) + mode[i + 1:], gd, i
 
     def settle(self, mode, xs, t, first=None):
@@ -352,9 +363,8 @@ class _Engine:
 
     def log(self, switched, t):
         """Append the switches of one settle() call to the event list."""
-        names = [c.name for c in self.plant.moded]
         for gd, m_from, m_to, rate in switched:
-            i = names.index(gd.component)
+            i = self.moded_index[gd.component]
             self.events.append(Event(t, gd.kind, gd.component, m_from[i], m_to[i], rate))
             self.pairs[(gd.component, m_from[i], m_to[i])] += 1
 

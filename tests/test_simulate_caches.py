@@ -169,11 +169,15 @@ def test_runs_with_warm_caches_equal_a_fresh_process(tmp_path):
         assert np.array_equal(fresh[k], warm[k]), k
 
 
-def test_outputs_equal_the_uncompiled_output_function_point_by_point():
+@pytest.mark.parametrize("effects, t_end, storm", [(("second_motor",), 40.0, False),
+                                                   (("speed_sensor_lag", "second_motor"), 8.0, True)])
+def test_outputs_equal_the_uncompiled_output_function_point_by_point(effects, t_end, storm):
     # truth: the CasADi output function of each sample's mode (SX, not the generated C), one point at a time;
-    # checks that the per-segment evaluation puts every output at its own sample
+    # checks that the outputs evaluated per segment (few switches) or per mode (a run that keeps switching)
+    # are put back at their own samples
     p = Parameters(gains="given", k_p=2.0, k_I=5.0, ramp_rate=74.0, omega_ref=500.0)
-    r = simulate(p, t_end=8.0, effects=("speed_sensor_lag", "second_motor"))
+    r = simulate(p, t_end=t_end, effects=effects)
+    assert (len(r.events) > 100) == storm
     plant = get_plant(r.components, p, rtol=1e-7, atol=1e-8)
     P = plant.param_vector(p)
     xs = np.vstack([r.states[n] / s for n, s in zip(plant.state_names, plant.scales)])
