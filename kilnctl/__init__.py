@@ -10,15 +10,23 @@ from .errors import KilnctlError
 from .params import Parameters
 
 
+_REGISTRY = None
+
+
 def _components():
     """The component registry, for the parameter declarations (``kilnctl.params.SPECS``).
 
     Importing :mod:`kilnctl.model` registers every component; the root wires
-    it in because ``params`` sits below the model that imports it.
+    it in because ``params`` sits below the model that imports it.  The
+    registry is one dict for the life of the process (components are added to
+    it), so it is imported once: this is called at every parameter look-up.
     """
-    from .model.base import REGISTRY
+    global _REGISTRY
+    if _REGISTRY is None:
+        from .model.base import REGISTRY
 
-    return REGISTRY
+        _REGISTRY = REGISTRY
+    return _REGISTRY
 
 
 def _design_gains(params):

@@ -142,13 +142,21 @@ class RegistryView(Mapping):
     def __init__(self, build):
         self._build = build
         self._table: dict = {}
-        self._size = -1
+        self._key = None
 
     def _current(self) -> dict:
         REGISTRY = _component_registry()
-        if self._size != len(REGISTRY):
-            self._table, self._size = self._build(REGISTRY), len(REGISTRY)
+        # the registry of kilnctl.model counts its changes in ``version``; a plain dict is judged by its size
+        key = (id(REGISTRY), getattr(REGISTRY, "version", None), len(REGISTRY))
+        if self._key != key:
+            # the registry is held, so its id cannot be reused by another object while it is in the key
+            self._table, self._key, self._registry = self._build(REGISTRY), key, REGISTRY
         return self._table
+
+    def snapshot(self) -> dict:
+        """The current table, a new dict object whenever the registry changed (callers may key a cache on its
+        identity); read it, never change it."""
+        return self._current()
 
     def __getitem__(self, key):
         return self._current()[key]
@@ -341,6 +349,32 @@ def _check_value(spec: ParamSpec, value: Any) -> float | str:
     return v
 
 
+def _check_together(merged: dict) -> None:
+    """Refuse values that are each valid but impossible together (``merged``: a full set of values)."""
+    if merged["mu_c"] > merged["mu_s"]:
+        raise ParameterError(
+            f"parameter 'mu_c' = {merged['mu_c']} exceeds 'mu_s' = {merged['mu_s']}: the kinetic friction "
+            "coefficient must not exceed the static one")
+    if merged["J_e_mode"] == "table" and merged["J_e"] <= merged["J_v"]:
+        raise ParameterError(
+            f"parameter 'J_e' = {merged['J_e']} must exceed 'J_v' = {merged['J_v']} when J_e_mode = 'table' "
+            "(the kiln shell inertia is J_e - J_v)")
+    if merged["R_o"] <= merged["R_p"]:
+        raise ParameterError(
+            f"parameter 'R_o' = {merged['R_o']} must exceed 'R_p' = {merged['R_p']}: the girth gear is the "
+            "larger wheel")
+    if merged["n"] <= merged["R_o"] / merged["R_p"]:
+        raise ParameterError(
+            f"parameter 'n' = {merged['n']} must exceed the girth-gear ratio R_o/R_p = "
+            f"{merged['R_o'] / merged['R_p']:.4g}: the gearbox ratio n/n_p would be below 1")
+    pitch = math.pi * merged["module"]
+    if merged["delta_x"] >= pitch:
+        raise ParameterError(
+            f"parameter 'delta_x' = {merged['delta_x']!r} m (backlash) is not below the circular pitch "
+            f"pi * module = {pitch:.4g} m: the teeth could not mesh. Backlash is in metres: "
+            f"{merged['delta_x']:g} mm is delta_x = {merged['delta_x'] / 1000:g}")
+
+
 class Parameters(Mapping):
     """A validated, immutable set of kiln-drive parameters.
 
@@ -363,39 +397,22 @@ class Parameters(Mapping):
     quantities (``n_p``, ``n_r``, ``k_e``, ``J_stick`` ...) are properties.
     """
 
-    __slots__ = ("_values",)
+    # _specs: the declaration table (SPECS.snapshot()) the values were checked against
+    __slots__ = ("_values", "_specs")
 
     def __init__(self, values: Mapping[str, Any] | None = None, **overrides: Any):
-        merged = {name: spec.default for name, spec in SPECS.items()}
+        specs = SPECS.snapshot()
+        merged = {name: spec.default for name, spec in specs.items()}
         given = dict(values or {})
         given.update(overrides)
         for key, value in given.items():
-            if key not in SPECS:
-                raise ParameterError(f"unknown parameter {key!r}: {close_matches_hint(key, SPECS)}")
-            merged[key] = _check_value(SPECS[key], value)
-        if merged["mu_c"] > merged["mu_s"]:
-            raise ParameterError(
-                f"parameter 'mu_c' = {merged['mu_c']} exceeds 'mu_s' = {merged['mu_s']}: the kinetic friction "
-                "coefficient must not exceed the static one")
-        if merged["J_e_mode"] == "table" and merged["J_e"] <= merged["J_v"]:
-            raise ParameterError(
-                f"parameter 'J_e' = {merged['J_e']} must exceed 'J_v' = {merged['J_v']} when J_e_mode = 'table' "
-                "(the kiln shell inertia is J_e - J_v)")
-        if merged["R_o"] <= merged["R_p"]:
-            raise ParameterError(
-                f"parameter 'R_o' = {merged['R_o']} must exceed 'R_p' = {merged['R_p']}: the girth gear is the "
-                "larger wheel")
-        if merged["n"] <= merged["R_o"] / merged["R_p"]:
-            raise ParameterError(
-                f"parameter 'n' = {merged['n']} must exceed the girth-gear ratio R_o/R_p = "
-                f"{merged['R_o'] / merged['R_p']:.4g}: the gearbox ratio n/n_p would be below 1")
-        pitch = math.pi * merged["module"]
-        if merged["delta_x"] >= pitch:
-            raise ParameterError(
-                f"parameter 'delta_x' = {merged['delta_x']!r} m (backlash) is not below the circular pitch "
-                f"pi * module = {pitch:.4g} m: the teeth could not mesh. Backlash is in metres: "
-                f"{merged['delta_x']:g} mm is delta_x = {merged['delta_x'] / 1000:g}")
+            spec = specs.get(key)
+            if spec is None:
+                raise ParameterError(f"unknown parameter {key!r}: {close_matches_hint(key, specs)}")
+            merged[key] = _check_value(spec, value)
+        _check_together(merged)
         object.__setattr__(self, "_values", merged)
+        object.__setattr__(self, "_specs", specs)
 
     # --- mapping protocol ---------------------------------------------------
     def __getitem__(self, key: str):
@@ -413,8 +430,10 @@ class Parameters(Mapping):
     def __getattr__(self, key: str):
         if key.startswith("_"):
             raise AttributeError(key)
-        if key in SPECS:
+        try:
             return self._values[key]
+        except KeyError:
+            pass
         raise AttributeError(f"Parameters has no attribute {key!r}: {close_matches_hint(key, SPECS)}")
 
     def __setattr__(self, key, value):
@@ -435,7 +454,7 @@ class Parameters(Mapping):
         return hash(tuple(sorted(self._values.items())))
 
     def replace(self, **changes: Any) -> "Parameters":
-        """Return a copy with some values changed (validated again).
+        """Return a copy with some values changed (the changes validated, and all values together).
 
         Parameters
         ----------
@@ -447,9 +466,25 @@ class Parameters(Mapping):
         Parameters
             The new parameter set; ``self`` is unchanged.
         """
+        specs = SPECS.snapshot()
         values = dict(self._values)
-        values.update(changes)
-        return Parameters(values)
+        if specs is not self._specs:  # a component was registered since: check everything again
+            values.update(changes)
+            return Parameters(values)
+        # the declarations are those self was checked against, so only the changed values need checking
+        # (in declaration order, unknown names last: the first error is the one a full check raises)
+        order = changes if len(changes) < 2 else (
+            [k for k in specs if k in changes] + [k for k in changes if k not in specs])
+        for key in order:
+            spec = specs.get(key)
+            if spec is None:
+                raise ParameterError(f"unknown parameter {key!r}: {close_matches_hint(key, specs)}")
+            values[key] = _check_value(spec, changes[key])
+        _check_together(values)
+        new = object.__new__(Parameters)
+        object.__setattr__(new, "_values", values)
+        object.__setattr__(new, "_specs", specs)
+        return new
 
     def as_dict(self) -> dict[str, float | str]:
         """Return the values as a plain dictionary (name -> value)."""

@@ -40,9 +40,12 @@ __all__ = ["simulate", "resolve_gains", "plant_structure", "DEFAULT_DT"]
 #: a guard on its boundary counts as crossed at once when its rate takes it past -GUARD_EPS within
 #: this time [s]; slower (grazing) guards are left to the integrator's crossing detection
 GUARD_LOOKAHEAD = 1e-3
-#: samples the compiled stepper returns per call; when full, the run continues from the last accepted
+#: most samples the compiled stepper returns per call; when full, the run continues from the last accepted
 #: step (results do not depend on this number: tests/test_differential.py)
 OUTPUT_BUFFER = 16384
+#: mode switches the recording buffers have room for from the start (more make them grow: results do not depend
+#: on this number)
+RESERVED_EVENTS = 64
 #: default output and guard-sampling step per model [s] (the one definition: the sweeps and the measurement
 #: runner use it; the compiled stepper gets it as its output grid)
 DEFAULT_DT = {"macro": 5e-3, "micro": 1e-3}
@@ -108,6 +111,29 @@ def _check_horizon(t_end, dt):
         raise SimulationError(f"dt = {dt} s exceeds t_end = {t_end} s: choose a smaller output step")
 
 
+def _initial_rows(t_end, dt) -> int:
+    """Samples the recording buffers have room for at the start: the grid, :data:`RESERVED_EVENTS` mode
+    switches (two samples each) and some slack, so that most runs never grow them."""
+    return int(t_end / dt) + 2 * RESERVED_EVENTS + 256
+
+
+def _call_rows(t, t_end, dt, hmax) -> int:
+    """Output rows to give one compiled-stepper call from time t: :data:`OUTPUT_BUFFER`, or fewer where the
+    call could not fill it.
+
+    The stepper caps its step at half its buffer (``0.5*max_out*dt``) and stops early when the buffer is
+    full, so a smaller buffer changes the integration unless both are out of reach: this gives at least
+    the grid points left after t (with a margin of 8) and at least ``2*hmax/dt + 1`` rows, and the full
+    buffer whenever the cap would bind at that size.  The buffer given is always as large as the number
+    passed, whatever these counts: they only decide whether the results are those of the full buffer.
+    """
+    if hmax > 0.5 * OUTPUT_BUFFER * dt:
+        return OUTPUT_BUFFER
+    k0 = math.floor(t / dt * (1 + 1e-14)) + 1  # first grid index after t, as rosenbrock.c counts it
+    left = math.floor(t_end * (1 + 1e-15) / dt) - k0 + 1 + 8
+    return int(min(OUTPUT_BUFFER, max(left, math.ceil(2 * hmax / dt) + 1)))
+
+
 class _Engine:
     """One simulation run: state, mode, recorded points and events."""
 
@@ -118,11 +144,17 @@ class _Engine:
         self.max_events = max_events
         self.events: list[Event] = []
         self.pairs: Counter = Counter()
-        self.t_rec: list[np.ndarray] = []
-        self.x_rec: list[np.ndarray] = []
-        self.m_rec: list[np.ndarray] = []
+        # recorded samples: times and scaled states as rows (the compiled stepper's layout, which writes into
+        # these buffers directly), the first n_rec rows used; a run of consecutive samples in one mode is a
+        # segment: its mode code and length
+        self.t_buf = np.empty(0)
+        self.x_buf = np.empty((0, len(plant.state_names)))
+        self.n_rec = 0
+        self.seg_mode: list[int] = []
+        self.seg_len: list[int] = []
         self.mode_index: dict[tuple, int] = {}
         self.n_steps = 0
+        self.moded_index = {c.name: i for i, c in enumerate(plant.moded)}  # place of a component in a mode
 
     # --- recording ------------------------------------------------------------
     def _mid(self, mode):
@@ -130,27 +162,70 @@ class _Engine:
             self.mode_index[mode] = len(self.mode_index)
         return self.mode_index[mode]
 
+    def reserve(self, k: int) -> None:
+        """Make room for k more samples in the recording buffers."""
+        need = self.n_rec + int(k)
+        if need <= len(self.t_buf):
+            return
+        cap = max(need, 2 * len(self.t_buf))
+        t_buf, x_buf = np.empty(cap), np.empty((cap, self.x_buf.shape[1]))
+        t_buf[:self.n_rec], x_buf[:self.n_rec] = self.t_buf[:self.n_rec], self.x_buf[:self.n_rec]
+        self.t_buf, self.x_buf = t_buf, x_buf
+
+    def _segment(self, mf, k: int) -> None:
+        """Count k samples just written after the used rows as recorded in mode ``mf.mode``."""
+        if k == 0:
+            return
+        mid = self._mid(mf.mode)
+        if self.seg_mode and self.seg_mode[-1] == mid:
+            self.seg_len[-1] += k
+        else:
+            self.seg_mode.append(mid)
+            self.seg_len.append(k)
+        self.n_rec += k
+
     def record(self, mf, t, X):
         """Record times t (1-d) and scaled states X (nx x k) in mode ``mf.mode``."""
-        if X.shape[1] == 0:
+        k = X.shape[1]
+        if k == 0:
             return
-        self.t_rec.append(np.asarray(t, dtype=float))
-        self.x_rec.append(np.asarray(X, dtype=float))
-        self.m_rec.append(np.full(X.shape[1], self._mid(mf.mode)))
+        self.reserve(k)
+        u = self.n_rec
+        self.t_buf[u:u + k] = t
+        self.x_buf[u:u + k] = X.T
+        self._segment(mf, k)
 
     def outputs(self):
-        """Times, scaled states, mode codes and outputs of every recorded sample."""
-        T = np.concatenate(self.t_rec)
-        X = np.hstack(self.x_rec)
-        M = np.concatenate(self.m_rec)
-        Y = np.empty((len(self.plant.output_names), len(T)))
-        for mode, mid in self.mode_index.items():
+        """Times, scaled states (nx x N), mode codes and outputs (ny x N) of every recorded sample."""
+        N = self.n_rec
+        T, XR = self.t_buf[:N].copy(), self.x_buf[:N]  # T is kept by the response: not a view of the buffer
+        M = np.repeat(np.array(self.seg_mode, dtype=np.intp), self.seg_len)
+        Y = np.empty((N, len(self.plant.output_names)))  # rows, as the compiled outputs write them
+        modes = {mid: mode for mode, mid in self.mode_index.items()}
+        steppers = {mid: self.plant.functions(mode).stepper for mid, mode in modes.items()}
+        others = {mid for mid, st in steppers.items() if st is None}
+        # each sample is evaluated on its own, so the numbers do not depend on how samples are grouped into calls:
+        # one call per segment, written in place; with many more segments than modes (a run that keeps
+        # switching), one call per mode on its samples gathered by a stable sort, scattered back once
+        if len(self.seg_mode) <= 4 * len(modes) + 32:
+            a = 0
+            for mid, k in zip(self.seg_mode, self.seg_len):
+                if steppers[mid] is not None:
+                    steppers[mid].outputs_rows(self.P, T[a:a + k], XR[a:a + k], out=Y[a:a + k])
+                a += k
+        else:
+            order = np.argsort(M, kind="stable")
+            bounds = np.concatenate([[0], np.cumsum(np.bincount(M, minlength=len(modes)))])
+            Ts, Xs, Ys = T[order], XR[order], np.empty_like(Y)
+            for mid, st in steppers.items():
+                a, b = bounds[mid], bounds[mid + 1]
+                if st is not None:
+                    st.outputs_rows(self.P, Ts[a:b], Xs[a:b], out=Ys[a:b])
+            Y[order] = Ys  # rows of the modes without a stepper are filled below
+        X = XR.T
+        for mid in sorted(others):  # modes without a compiled stepper: CasADi's batched output map
             idx = np.nonzero(M == mid)[0]
-            mf = self.plant.functions(mode)
-            if mf.stepper is not None:
-                Y[:, idx] = mf.stepper.outputs(self.P, T[idx], X[:, idx])
-                continue
-            fmap = mf.output_map
+            fmap = self.plant.functions(modes[mid]).output_map
             B = fmap.size2_in(0)
             for s0 in range(0, len(idx), B):
                 sl = idx[s0:s0 + B]
@@ -159,8 +234,8 @@ class _Engine:
                 Tb = np.full(B, T[sl[-1]])
                 Xb[:, :k], Tb[:k] = X[:, sl], T[sl]
                 Xb[:, k:] = X[:, sl[-1:]]
-                Y[:, sl] = np.asarray(fmap(Xb, Tb, self.P))[:, :k]
-        return T, X, M, Y
+                Y[sl] = np.asarray(fmap(Xb, Tb, self.P))[:, :k].T
+        return T, X, M, Y.T
 
     # --- guards -------------------------------------------------------------------
     def guards(self, mf, xs, t):
@@ -184,8 +259,9 @@ class _Engine:
         if evaluated is None:
             return None
         g, _, gdot = evaluated
-        for j in range(len(g)):
-            if g[j] < -GUARD_EPS or (g[j] <= tol and gdot[j] * GUARD_LOOKAHEAD < -GUARD_EPS):
+        # as Python floats (the same doubles): cheaper to compare one by one than numpy scalars
+        for j, (gj, rj) in enumerate(zip(np.asarray(g).tolist(), np.asarray(gdot).tolist())):
+            if gj < -GUARD_EPS or (gj <= tol and rj * GUARD_LOOKAHEAD < -GUARD_EPS):
                 return j
         return None
 
@@ -195,8 +271,7 @@ class _Engine:
         target = gd.target
         if gd.alt_target is not None:
             target = gd.target if sel[j] >= 0 else gd.alt_target
-        names = [c.name for c in self.plant.moded]
-        i = names.index(gd.component)
+        i = self.moded_index[gd.component]
         return mode[:i] + (target,) + mode[i + 1:], gd, i
 
     def settle(self, mode, xs, t, first=None):
@@ -288,9 +363,8 @@ class _Engine:
 
     def log(self, switched, t):
         """Append the switches of one settle() call to the event list."""
-        names = [c.name for c in self.plant.moded]
         for gd, m_from, m_to, rate in switched:
-            i = names.index(gd.component)
+            i = self.moded_index[gd.component]
             self.events.append(Event(t, gd.kind, gd.component, m_from[i], m_to[i], rate))
             self.pairs[(gd.component, m_from[i], m_to[i])] += 1
 
@@ -327,12 +401,17 @@ class _Engine:
             nonlocal h
             if mf.stepper is None:
                 raise SimulationError("method 'ros3p' needs a C compiler (gcc or $CC); use method='cvodes'")
+            # the stepper writes its samples straight into the recording buffers
+            rows = _call_rows(t, t_end, dt, hmax)
+            self.reserve(rows)
+            u = self.n_rec
             r = mf.stepper.run(self.P, t, t_end, xs, dt, rtol, atol, hmax, h if h > 0 else FIRST_STEP,
-                               self.event_tol, max_out=OUTPUT_BUFFER, runaway=RUNAWAY, guard_eps=GUARD_EPS)
+                               self.event_tol, max_out=rows, runaway=RUNAWAY, guard_eps=GUARD_EPS,
+                               out_t=self.t_buf[u:u + rows], out_x=self.x_buf[u:u + rows])
             st = r["status"]
             if st == -6:
                 self.check_bounded(np.zeros((len(xs), 0)), r["x_ev"], r["t_ev"], mf.mode)
-            self.record(mf, r["t"], r["x"])
+            self._segment(mf, len(r["t"]))
             self.n_steps += r["n_steps"]
             if st < 0:
                 raise SimulationError(
@@ -545,6 +624,7 @@ def simulate(params: Parameters | None = None, model: str = "macro", t_end: floa
             raise SimulationError(f"initial_mode {comp!r} = {m!r}: choose one of {plant.moded[i].modes}")
         mode0 = mode0[:i] + (m,) + mode0[i + 1:]
     eng = _Engine(plant, P, event_tol, max_events)
+    eng.reserve(_initial_rows(t_end, dt))
     wall0 = time.perf_counter()
     if method == "auto":
         method = "ros3p" if plant.functions(mode0).stepper is not None else "cvodes"
@@ -554,14 +634,16 @@ def simulate(params: Parameters | None = None, model: str = "macro", t_end: floa
     else:
         advance = eng.cvodes(float(t_end), float(dt))
     eng.run(xs0, mode0, float(t_end), advance)
-    T, X, code, Y = eng.outputs()
+    T, X, _, Y = eng.outputs()
     wall = time.perf_counter() - wall0
     build = plant.build_seconds - build0
     modes = {v: k for k, v in eng.mode_index.items()}
     mode_arrays = {}
+    seg_mode = np.array(eng.seg_mode, dtype=np.intp)
     for ci, c in enumerate(plant.moded):
         labels = np.array([modes[i][ci] for i in range(len(modes))])
-        mode_arrays[c.name] = labels[code]
+        # label of each segment repeated over its samples: the same as labels[code], without a gather per sample
+        mode_arrays[c.name] = np.repeat(labels[seg_mode], eng.seg_len)
     return Response(
         t=T,
         outputs=dict(zip(plant.output_names, Y)),

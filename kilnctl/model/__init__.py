@@ -34,6 +34,8 @@ ORDER: tuple[str, ...] = (
     "kiln", "kiln_fixed", "bearing_friction", "viscous_drag", "kiln_unbalance", "burden", "bending_stress",
 )
 
+_RANK = {nm: i for i, nm in enumerate(ORDER)}
+
 #: the paper's two models as component lists
 MODELS: dict[str, tuple[str, ...]] = {
     # macro model (eqs. 1-21): rigid reducer, burden stick-slip, drive limits
@@ -90,7 +92,7 @@ def phase_rank(name: str) -> float:
     """Phase rank of a component: its place in ORDER; reference profiles (``ramp_*``) right after
     ``ramp``, smoothed variants (``*_smooth``) at the place of the component they smooth, a component
     with ``phase_after`` right after that one, others just before ``bending_stress``."""
-    rank = {nm: i for i, nm in enumerate(ORDER)}
+    rank = _RANK
     if name in rank:
         return rank[name]
     after = getattr(REGISTRY.get(name), "phase_after", None)

@@ -9,9 +9,11 @@ Parameters are symbolic inputs, so a plant is reused for any numeric values.
 
 from __future__ import annotations
 
+import time
 from collections import defaultdict
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import lru_cache
+from typing import Callable
 
 import casadi as ca
 import numpy as np
@@ -251,6 +253,12 @@ class ModeFunctions:
         None without a C compiler.
     guards : list of Guard
         Guard declarations (kind, component, targets).
+
+    Notes
+    -----
+    ``guard_map``, ``output_map``, ``integ_grid``, ``integ_one`` and ``step``
+    serve the CVODES engine only: for a mode with a compiled stepper they are
+    built when first asked for (most runs never do), by ``make_cvodes``.
     """
 
     mode: tuple
@@ -258,13 +266,22 @@ class ModeFunctions:
     output: ca.Function
     project: ca.Function
     guard: ca.Function
-    guard_map: ca.Function
-    output_map: ca.Function
-    integ_grid: ca.Function
-    integ_one: ca.Function
-    step: ca.Function
     stepper: object
     guards: list
+    make_cvodes: Callable[[], dict] = field(repr=False, compare=False)
+    _cvodes: dict | None = field(default=None, repr=False, compare=False)
+
+    def _cvodes_part(self, name: str) -> ca.Function:
+        parts = self._cvodes
+        if parts is None:  # two threads may both build them: the same functions, the last one kept
+            parts = self._cvodes = self.make_cvodes()
+        return parts[name]
+
+    guard_map = property(lambda self: self._cvodes_part("guard_map"))
+    output_map = property(lambda self: self._cvodes_part("output_map"))
+    integ_grid = property(lambda self: self._cvodes_part("integ_grid"))
+    integ_one = property(lambda self: self._cvodes_part("integ_one"))
+    step = property(lambda self: self._cvodes_part("step"))
 
 
 class Plant:
@@ -305,6 +322,9 @@ class Plant:
                     raise ModelError(f"component {nm!r} needs component {req!r}: add it to the list")
         self.names = tuple(names)
         self.options = dict(options)
+        #: numeric parameters in the order of every mode's parameter vector, fixed when the plant is made (a
+        #: component registered later adds parameters to new plants, not to this one)
+        self.numeric_names = numeric_names()
         self.components: list[Component] = [REGISTRY[nm]() for nm in names]
         self.spec = ModelSpec()
         for c in self.components:
@@ -323,8 +343,8 @@ class Plant:
 
     # --- numeric helpers ----------------------------------------------------
     def param_vector(self, params: Parameters) -> np.ndarray:
-        """Numeric parameter vector in :func:`~kilnctl.model.base.numeric_names` order."""
-        return np.array([params[n] for n in numeric_names()], dtype=float)
+        """Numeric parameter vector in :attr:`numeric_names` order."""
+        return np.array([params[n] for n in self.numeric_names], dtype=float)
 
     def initial(self, params: Parameters) -> tuple[np.ndarray, tuple]:
         """Initial scaled state and mode at t = 0.
@@ -364,7 +384,7 @@ class Plant:
             Time symbol.
         sp : SymParams
         """
-        sp = SymParams(self.options)
+        sp = SymParams(self.options, self.numeric_names)
         xs = ca.SX.sym("xs", len(self.state_names))
         t = ca.SX.sym("t")
         x = {n: xs[i] * self.scales[i] for i, n in enumerate(self.state_names)}
@@ -397,8 +417,6 @@ class Plant:
         """Compiled functions of a mode combination (built once, then cached)."""
         mf = self._cache.get(mode)
         if mf is None:
-            import time
-
             t_start = time.perf_counter()
             mf = self._build(mode)
             self._cache[mode] = mf
@@ -424,10 +442,25 @@ class Plant:
         proj = ca.vertcat(*[e.projection.get(nm, e.x[nm]) / self.scales[i]
                             for i, nm in enumerate(self.state_names)])
         project = ca.Function("project", [xs, t, P], [proj])
-        n = self.n_grid
         stepper = build_stepper(f, xs, t, P, g, y, sel, gdot, proj) if self.compile else None
         if stepper is not None:
             self.compiled = True
+
+        def make_cvodes():
+            t_start = time.perf_counter()
+            parts = self._cvodes_functions(e, xs, t, P, f, g, out, stepper)
+            if stepper is not None:  # built after the mode: counted as build time of the run that asks
+                self.build_seconds += time.perf_counter() - t_start
+            return parts
+
+        mf = ModeFunctions(mode, rhs, out, project, guard, stepper, list(e.guards), make_cvodes)
+        if stepper is None:  # the CVODES engine will run this mode: build (and compile) its functions now
+            mf._cvodes = make_cvodes()
+        return mf
+
+    def _cvodes_functions(self, e, xs, t, P, f, g, out, stepper) -> dict:
+        """The CVODES engine's functions of one mode (see :class:`ModeFunctions`)."""
+        n = self.n_grid
         guard_g = ca.Function("guard_g", [xs, t, P], [g])
         guard_map = guard_g.map(n)
         output_map = out.map(OUTPUT_BATCH)
@@ -453,12 +486,14 @@ class Plant:
         Xm = integ_grid(x0=x0m, p=ca.vertcat(pm, Pm))["xf"]
         Tm = pm[0] + pm[1] * ca.DM(np.linspace(0, 1, n + 1)[1:]).T
         step = ca.Function("step", [x0m, pm, Pm], [Xm, guard_map(Xm, Tm, Pm)])
-        return ModeFunctions(mode, rhs, out, project, guard, guard_map, output_map, integ_grid, integ_one, step,
-                             stepper, list(e.guards))
+        return {"guard_map": guard_map, "output_map": output_map, "integ_grid": integ_grid, "integ_one": integ_one,
+                "step": step}
 
 
 @lru_cache(maxsize=64)
-def _plant_cached(names: tuple, options: tuple, n_grid: int, rtol: float, atol: float) -> Plant:
+def _plant_cached(names: tuple, options: tuple, n_grid: int, rtol: float, atol: float, registry: int) -> Plant:
+    # ``registry`` (REGISTRY.version) is only part of the key: a plant made before a component was registered
+    # or replaced is not reused (its parameter vector and component classes are those of then)
     return Plant(names, dict(options), n_grid=n_grid, rtol=rtol, atol=atol)
 
 
@@ -481,4 +516,5 @@ def get_plant(names, params: Parameters, n_grid: int = 500, rtol: float = 1e-8, 
     Plant
     """
     options = tuple((k, params[k]) for k in option_names())
-    return _plant_cached(tuple(names), options, int(n_grid), float(rtol), float(atol))
+    return _plant_cached(tuple(names), options, int(n_grid), float(rtol), float(atol),
+                         getattr(REGISTRY, "version", len(REGISTRY)))

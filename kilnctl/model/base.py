@@ -31,14 +31,27 @@ __all__ = ["StateVar", "Guard", "Component", "REGISTRY", "register", "SymParams"
            "NUMERIC_NAMES", "option_names", "numeric_names"]
 
 
+#: (declaration table, option names, numeric names): the split of the last declaration table seen, kept
+#: until the registry changes (SPECS.snapshot() then returns a new table)
+_NAMES: list = [None, (), ()]
+
+
+def _split_names() -> list:
+    table = SPECS.snapshot()
+    if _NAMES[0] is not table:
+        _NAMES[:] = [table, tuple(n for n, s in table.items() if s.is_option),
+                     tuple(n for n, s in table.items() if not s.is_option)]
+    return _NAMES
+
+
 def option_names() -> tuple[str, ...]:
     """Names of the string options (they select the structure, not a value), in declaration order."""
-    return tuple(n for n, s in SPECS.items() if s.is_option)
+    return _split_names()[1]
 
 
 def numeric_names() -> tuple[str, ...]:
     """Names of the numeric parameters (symbolic inputs of every model function), in declaration order."""
-    return tuple(n for n, s in SPECS.items() if not s.is_option)
+    return _split_names()[2]
 
 
 def __getattr__(name: str):
@@ -117,11 +130,14 @@ class SymParams:
     ----------
     options : dict
         Values of the string options (structure).
+    names : sequence of str, optional
+        The numeric parameters, in the order of the symbol vector (default:
+        :func:`numeric_names` now; a plant passes the names it was built with).
     """
 
-    def __init__(self, options: dict[str, str]):
+    def __init__(self, options: dict[str, str], names=None):
         self._options = dict(options)
-        names = numeric_names()
+        names = numeric_names() if names is None else tuple(names)
         self.vector = ca.SX.sym("P", len(names))
         self._sym = {name: self.vector[i] for i, name in enumerate(names)}
 
@@ -223,8 +239,62 @@ class Component:
         return None
 
 
-#: all known components, by name
-REGISTRY: dict[str, type[Component]] = {}
+class _Registry(dict):
+    """A dict of components whose ``version`` changes at every change, so that tables derived from it
+    (:data:`kilnctl.params.SPECS`, the parameter names, the cached plants) know when to rebuild."""
+
+    version = 0
+
+    def _changed(self) -> None:
+        self.version += 1
+
+    def __setitem__(self, key, value):
+        super().__setitem__(key, value)
+        self._changed()
+
+    def __delitem__(self, key):
+        super().__delitem__(key)
+        self._changed()
+
+    def __ior__(self, other):
+        super().__ior__(other)
+        self._changed()
+        return self
+
+    def pop(self, *args):
+        """Remove a component (see :meth:`dict.pop`)."""
+        try:
+            return super().pop(*args)
+        finally:
+            self._changed()
+
+    def popitem(self):
+        """Remove the last component (see :meth:`dict.popitem`)."""
+        try:
+            return super().popitem()
+        finally:
+            self._changed()
+
+    def clear(self):
+        """Remove every component."""
+        super().clear()
+        self._changed()
+
+    def update(self, *args, **kwargs):
+        """Add or replace components (see :meth:`dict.update`)."""
+        super().update(*args, **kwargs)
+        self._changed()
+
+    def setdefault(self, key, default=None):
+        """See :meth:`dict.setdefault`."""
+        try:
+            return super().setdefault(key, default)
+        finally:
+            self._changed()
+
+
+#: all known components, by name (a dict whose ``version`` counts its changes)
+REGISTRY: dict[str, type[Component]] = _Registry()
 
 
 def register(cls: type[Component]) -> type[Component]:

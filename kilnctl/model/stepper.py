@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import ctypes
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import casadi as ca
@@ -43,7 +43,9 @@ ABI = 4
 #: most states and most guards the C stepper handles (its fixed arrays, ``NMAX``/``GMAX`` in rosenbrock.c)
 NMAX = 64
 
-_D = ctypes.POINTER(ctypes.c_double)
+# double arrays are passed as addresses (``ndarray.ctypes.data``, the caller holding the array): about 3 us less
+# per array than ``data_as(POINTER(c_double))``, which adds up over the ~10^5 calls of a diagnosis
+_D = ctypes.c_void_p
 _I = ctypes.POINTER(ctypes.c_int)
 _d, _i = ctypes.c_double, ctypes.c_int
 _SIGNATURES = {
@@ -81,9 +83,25 @@ class Stepper:
     ng: int
     ny: int
     n_p: int = -1
+    #: (P, its address) of the last parameter vector that was checked as it is: a run passes the same vector at
+    #: every call (one tuple, read and replaced whole, so threads sharing the stepper never mix two entries)
+    _last_p: tuple = field(default=(None, 0), repr=False, compare=False)
 
     def _params(self, P):
         return _vector("P", P, self.n_p) if self.n_p >= 0 else np.ascontiguousarray(P, dtype=float).ravel()
+
+    def _p_address(self, P):
+        """(array to hold during the call, its address) for parameter vector P, checked once per vector."""
+        last = self._last_p
+        if last[0] is P:  # held in _last_p, so its id cannot have been reused by another object
+            return P, last[1]
+        if (type(P) is np.ndarray and P.dtype == np.float64 and P.ndim == 1 and P.flags.c_contiguous
+                and (self.n_p < 0 or P.size == self.n_p)):
+            address = P.ctypes.data
+            self._last_p = (P, address)
+            return P, address
+        a = self._params(P)  # converted (or refused): a new array each call
+        return a, a.ctypes.data
 
     def outputs(self, P, T, X) -> np.ndarray:
         """Output signals at samples T (k,) with scaled states X (n x k); returns (ny x k)."""
@@ -91,35 +109,55 @@ class Stepper:
         X = np.asarray(X, dtype=float)
         if X.ndim != 2 or X.shape != (self.n, len(T)):
             raise SimulationError(f"compiled stepper: states of shape {X.shape}, expected ({self.n}, {len(T)})")
-        Xr = np.ascontiguousarray(X.T)
-        P = self._params(P)
-        Y = np.empty((len(T), self.ny))
-        st = self.lib.kiln_outputs(self.n, self.ny, P.ctypes.data_as(_D), len(T), T.ctypes.data_as(_D),
-                                   Xr.ctypes.data_as(_D), Y.ctypes.data_as(_D))
+        return self.outputs_rows(P, T, X.T).T
+
+    def outputs_rows(self, P, T, X, out=None) -> np.ndarray:
+        """Output signals at samples T (k,) with scaled states X given as rows (k x n); returns (k x ny).
+
+        The layout the C code reads and writes: a C-contiguous X is not copied.  ``out``, a C-contiguous
+        (k x ny) float array, receives the outputs (and is returned) instead of a new array.
+        """
+        T = np.ascontiguousarray(T, dtype=float).ravel()
+        X = np.ascontiguousarray(X, dtype=float)
+        if X.ndim != 2 or X.shape != (len(T), self.n):
+            raise SimulationError(f"compiled stepper: state rows of shape {X.shape}, expected ({len(T)}, {self.n})")
+        P, p_address = self._p_address(P)
+        if out is None:
+            Y = np.empty((len(T), self.ny))
+        elif (isinstance(out, np.ndarray) and out.dtype == np.float64 and out.shape == (len(T), self.ny)
+              and out.flags.c_contiguous and out.flags.writeable):
+            Y = out
+        else:
+            raise SimulationError(f"compiled stepper: out must be a writeable C-contiguous float array of shape "
+                                  f"({len(T)}, {self.ny})")
+        st = self.lib.kiln_outputs(self.n, self.ny, p_address, len(T), T.ctypes.data, X.ctypes.data,
+                                   Y.ctypes.data)
         if st != 0:
             raise SimulationError(f"compiled output evaluation failed ({STATUS.get(st, st)})")
-        return Y.T
+        return Y
 
     def guard(self, P, x, t):
         """Guards, selectors and their time derivatives at (x, t): three arrays of length ng."""
-        P, x = self._params(P), _vector("x", x, self.n)
+        P, p_address = self._p_address(P)
+        x = _vector("x", x, self.n)
         m = max(self.ng, 1)
-        g, sel, gd = np.empty(m), np.empty(m), np.empty(m)
-        if self.lib.kiln_guard(P.ctypes.data_as(_D), x.ctypes.data_as(_D), float(t), g.ctypes.data_as(_D),
-                               sel.ctypes.data_as(_D), gd.ctypes.data_as(_D)):
+        buf = np.empty((3, m))  # g, sel, gdot: one allocation, rows of m doubles
+        b = buf.ctypes.data
+        if self.lib.kiln_guard(p_address, x.ctypes.data, float(t), b, b + 8 * m, b + 16 * m):
             raise SimulationError("compiled guard evaluation failed")
-        return g[: self.ng], sel[: self.ng], gd[: self.ng]
+        return buf[0, : self.ng], buf[1, : self.ng], buf[2, : self.ng]
 
     def project(self, P, x, t):
         """Scaled state at time t projected onto the mode's constraints (rigid links, held current)."""
-        P, x = self._params(P), _vector("x", x, self.n)
+        P, p_address = self._p_address(P)
+        x = _vector("x", x, self.n)
         out = np.empty(self.n)
-        if self.lib.kiln_project(P.ctypes.data_as(_D), x.ctypes.data_as(_D), float(t), out.ctypes.data_as(_D)):
+        if self.lib.kiln_project(p_address, x.ctypes.data, float(t), out.ctypes.data):
             raise SimulationError("compiled projection failed")
         return out
 
     def run(self, P, t0, t_end, x0, dt_out, rtol, atol, hmax, h0, event_tol, max_out=4096, max_steps=500000,
-            runaway=RUNAWAY, guard_eps=GUARD_EPS):
+            runaway=RUNAWAY, guard_eps=GUARD_EPS, out_t=None, out_x=None):
         """Integrate from (t0, x0) to t_end or the first guard crossing.
 
         Parameters
@@ -149,19 +187,34 @@ class Stepper:
             Largest magnitude of a scaled state.
         guard_eps : float
             A guard has crossed when below -guard_eps.
+        out_t, out_x : ndarray, optional
+            Where to write the samples: C-contiguous float arrays of shape
+            (max_out,) and (max_out, n), e.g. row slices of a caller's buffer
+            for the whole run.  Default: new arrays, of which the used rows are
+            returned as copies.
 
         Returns
         -------
         dict
             ``status`` (see :data:`STATUS`), ``t`` and ``x`` (samples on the grid
-            t0 + k*dt_out), ``t_ev``, ``x_ev`` (end, event or restart point),
-            ``j_ev`` (guard index), ``n_steps``, ``h`` (next step size).
+            t0 + k*dt_out; ``x`` is n x k, a view of ``x_rows``, the same samples
+            as k x n rows; with ``out_t``/``out_x``, views of those),
+            ``t_ev``, ``x_ev`` (end, event or restart point), ``j_ev`` (guard
+            index), ``n_steps``, ``h`` (next step size).
         """
         max_out = int(max_out)
-        out_t = np.empty(max_out)
-        out_x = np.empty((max_out, self.n))
+        given = out_t is not None or out_x is not None
+        if given:
+            for name, a, shape in (("out_t", out_t, (max_out,)), ("out_x", out_x, (max_out, self.n))):
+                if (not isinstance(a, np.ndarray) or a.dtype != np.float64 or a.shape != shape
+                        or not a.flags.c_contiguous or not a.flags.writeable):
+                    raise SimulationError(f"compiled stepper: {name} must be a writeable C-contiguous float array of "
+                                          f"shape {shape}")
+        else:
+            out_t = np.empty(max_out)
+            out_x = np.empty((max_out, self.n))
         x0 = _vector("x0", x0, self.n)
-        P = self._params(P)
+        P, p_address = self._p_address(P)
         x_ev = np.empty(self.n)
         t_ev = np.zeros(1)
         n_out = ctypes.c_int(0)
@@ -169,16 +222,19 @@ class Stepper:
         n_steps = ctypes.c_int(0)
         h_last = ctypes.c_double(0.0)
         st = self.lib.kiln_run(
-            self.n, self.ng, P.ctypes.data_as(_D), ctypes.c_double(t0), ctypes.c_double(t_end),
-            x0.ctypes.data_as(_D), ctypes.c_double(dt_out), ctypes.c_double(rtol), ctypes.c_double(atol),
+            self.n, self.ng, p_address, ctypes.c_double(t0), ctypes.c_double(t_end),
+            x0.ctypes.data, ctypes.c_double(dt_out), ctypes.c_double(rtol), ctypes.c_double(atol),
             ctypes.c_double(hmax), ctypes.c_double(h0), ctypes.c_double(event_tol), max_out,
-            out_t.ctypes.data_as(_D), out_x.ctypes.data_as(_D), ctypes.byref(n_out), t_ev.ctypes.data_as(_D),
-            x_ev.ctypes.data_as(_D), ctypes.byref(j_ev), int(max_steps), ctypes.byref(n_steps), ctypes.byref(h_last),
+            out_t.ctypes.data, out_x.ctypes.data, ctypes.byref(n_out), t_ev.ctypes.data,
+            x_ev.ctypes.data, ctypes.byref(j_ev), int(max_steps), ctypes.byref(n_steps), ctypes.byref(h_last),
             ctypes.c_double(runaway), ctypes.c_double(guard_eps))
         k = n_out.value
-        # copies of the used rows, so the full buffers are freed now
-        return {"status": st, "t": out_t[:k].copy(), "x": out_x[:k].T.copy(), "t_ev": float(t_ev[0]), "x_ev": x_ev,
-                "j_ev": j_ev.value, "n_steps": n_steps.value, "h": h_last.value}
+        if given:
+            t_out, x_rows = out_t[:k], out_x[:k]
+        else:  # copies of the used rows, so the full buffers are freed now
+            t_out, x_rows = out_t[:k].copy(), out_x[:k].copy()
+        return {"status": st, "t": t_out, "x": x_rows.T, "x_rows": x_rows, "t_ev": float(t_ev[0]),
+                "x_ev": x_ev, "j_ev": j_ev.value, "n_steps": n_steps.value, "h": h_last.value}
 
 
 def build_stepper(f, xs, t, P, g, y, sel, gdot, proj) -> Stepper | None:
