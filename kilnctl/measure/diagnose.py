@@ -157,8 +157,7 @@ class Diagnosis:
         ... or else, with BIC falling by more than ``min_delta_bic`` also
         when the residual's coloured noise is modelled (see
         :func:`~kilnctl.measure.evidence.noise_filter`), not raise the held-out error by more than this
-        many standard errors [-] (which allow for its autocorrelation), nor
-        by more than ``min_holdout_gain`` %.
+        many standard errors [-] (which allow for its autocorrelation).
     max_effects : int, default 3
         At most this many effects are added.
     t0 : float, optional
@@ -689,10 +688,11 @@ class Diagnosis:
         # predicted significantly worse (an effect that only lines up the fitting part's events is)
         ok_bic = dbic < -self.min_delta_bic
         ok_gain = gain > self.min_holdout_gain
-        # "no worse" within the same margin as the gain asked for above, and not significantly worse: a
-        # held-out part predicted 6 % worse is not predicted no worse, however few independent samples it has
-        ok_robust = (dbic_corr < -self.min_delta_bic and gain_z > -self.holdout_z
-                     and gain > -self.min_holdout_gain)
+        # not significantly worse on the held-out part (in standard errors that allow for its autocorrelation):
+        # a stick-slip structure fitted on the fitting blocks can predict the held-out blocks' breakaways a
+        # sample off, which doubles their squared error without being evidence against it (the torque friction
+        # law on a torque law + compliance record: -112 %, -1.6 standard errors, and needed)
+        ok_robust = dbic_corr < -self.min_delta_bic and gain_z > -self.holdout_z
         why = f"held-out gain {gain:+.1f} % ({gain_z:+.1f} standard errors)"
         if ok_bic and ok_gain:
             reason = "BIC and held-out fit both improve"
