@@ -213,7 +213,7 @@ def test_caution_of_an_effect_without_a_period():
     assert _selected("second_motor", -300.0)._caveats(m, exp, SETUP) == []
     weak = _selected("second_motor", -4.0)._caveats(m, exp, SETUP)
     assert weak == ["second_motor: the evidence is weak once the residual's autocorrelation is allowed for "
-                    "(corrected dBIC -4.0 against the threshold -10); small effects (a few-millisecond sensor lag, "
+                    "(whitened dBIC -4.0 against the threshold -10); small effects (a few-millisecond sensor lag, "
                     "a stiff drive train) are often like this, but so is an effect that fits slow noise."]
     for name in ("second_motor", "viscous_drag", "backlash", "current_limit", "speed_sensor_lag",
                  "drivetrain_compliance", "torque_friction_law"):
@@ -238,7 +238,7 @@ def test_caution_of_an_effect_with_a_period():
     weak = _selected("kiln_unbalance", -4.0)._caveats(m, exp, SETUP)
     assert weak == ["kiln_unbalance was selected on a record of 40 s, 0.31 of its period (129 s): there it is "
                     + note + "; its evidence is weak once the residual's autocorrelation is allowed for "
-                    "(corrected dBIC -4.0). A record longer than one period tells them apart."]
+                    "(whitened dBIC -4.0). A record longer than one period tells them apart."]
     # a record longer than the period: only the weak-evidence caution remains
     assert caution_texts("kiln_unbalance", 200.0, period, note, -300.0, 10.0) == []
     assert caution_texts("kiln_unbalance", 200.0, period, note, -4.0, 10.0)[0].startswith(

@@ -120,7 +120,7 @@ def test_html_table_shows_both_dbics_and_why():
     assert "<td>-25.5</td><td>+57.3</td>" in text and "<td>-2614.7</td><td>-743.6</td>" in text
     for effect, (verdict, words) in WHY.items():
         assert f"{verdict}: " in text and words in text
-    assert "whitened dBIC (the cautions' corrected dBIC) is the same with the residual's coloured noise" in text  # how to read it
+    assert "whitened dBIC is the same with the residual's coloured noise" in text  # how to read it
 
 
 def test_ranking_figure_draws_both_dbics():

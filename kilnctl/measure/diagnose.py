@@ -1062,11 +1062,11 @@ def caution_texts(effect: str, span_s: float, period_s: float | None, short_reco
                  ": only part of a cycle is seen, which other causes can also produce")
         if weak:
             text += (f"; its evidence is weak once the residual's autocorrelation is allowed for "
-                     f"(corrected dBIC {delta_bic_corrected:+.1f})")
+                     f"(whitened dBIC {delta_bic_corrected:+.1f})")
         return [text + ". A record longer than one period tells them apart."]
     if weak:
         return [f"{effect}: the evidence is weak once the residual's autocorrelation is allowed for "
-                f"(corrected dBIC {delta_bic_corrected:+.1f} against the threshold {-min_delta_bic:g}); small "
+                f"(whitened dBIC {delta_bic_corrected:+.1f} against the threshold {-min_delta_bic:g}); small "
                 "effects (a few-millisecond sensor lag, a stiff drive train) are often like this, but so is an "
                 "effect that fits slow noise."]
     return []

@@ -883,7 +883,7 @@ def _sampling_notes(t, dts, med, lines, row_word) -> list[str]:
         out.append(f"{long_steps.size} step(s) of {limit:.3g}-{GAP_FACTOR:g} x the median step {med:.4g} s (missing "
                    f"samples?), the longest {dts[k]:.4g} s between t = {t[k]:.6g} s and {t[k + 1]:.6g} s ({row_word} "
                    f"{int(lines[k + 1])}); "
-                   "compared as they are, nothing interpolated")
+                   "the model is compared at the measured times (only the residual spectrum is taken on an even grid)")
     return out
 
 

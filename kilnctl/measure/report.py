@@ -764,7 +764,7 @@ HOW_TO_READ = {
                                         "added, on the fitting part of the record. It charges for every extra "
                                         "parameter; below −{min_delta_bic:g} counts as very strong evidence. It "
                                         "alone is fooled by coloured noise, hence the second test. The whitened "
-                                        "dBIC (the cautions' corrected dBIC) is the same with the residual's "
+                                        "dBIC is the same with the residual's "
                                         "coloured noise modelled (an autoregressive model of it): the evidence "
                                         "that is left once slow noise is allowed for."),
     "heldout": ("held-out gain", "How much better (in %) the model with the effect predicts the part of the "
