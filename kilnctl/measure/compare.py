@@ -254,6 +254,11 @@ class Comparison:
             if row == 0:
                 a0.legend(fontsize=7.5, loc="best")
                 a1.legend(fontsize=7.5, loc="best")
+                # head room above the data for the legends (they covered the autocorrelation's bars)
+                lo, hi = a2.get_ylim()
+                a2.set_ylim(lo, hi + 0.6 * (hi - lo))
+                lo, hi = a3.get_ylim()
+                a3.set_ylim(lo, hi * (hi / lo) ** 0.5 if lo > 0 else hi)
                 a2.legend(fontsize=7.5, loc="upper right")
                 a3.legend(fontsize=7.5, loc="upper right")
         for row in axes:
