@@ -349,6 +349,17 @@ def _check_value(spec: ParamSpec, value: Any) -> float | str:
     return v
 
 
+def _check_into(merged: dict, specs, given: Mapping[str, Any], keys) -> None:
+    """Check ``given[key]`` for each of ``keys`` (in that order) against its declaration and put it into
+    ``merged``, then check the full set together; the first bad value raises."""
+    for key in keys:
+        spec = specs.get(key)
+        if spec is None:
+            raise ParameterError(f"unknown parameter {key!r}: {close_matches_hint(key, specs)}")
+        merged[key] = _check_value(spec, given[key])
+    _check_together(merged)
+
+
 def _check_together(merged: dict) -> None:
     """Refuse values that are each valid but impossible together (``merged``: a full set of values)."""
     if merged["mu_c"] > merged["mu_s"]:
@@ -405,12 +416,7 @@ class Parameters(Mapping):
         merged = {name: spec.default for name, spec in specs.items()}
         given = dict(values or {})
         given.update(overrides)
-        for key, value in given.items():
-            spec = specs.get(key)
-            if spec is None:
-                raise ParameterError(f"unknown parameter {key!r}: {close_matches_hint(key, specs)}")
-            merged[key] = _check_value(spec, value)
-        _check_together(merged)
+        _check_into(merged, specs, given, given)
         object.__setattr__(self, "_values", merged)
         object.__setattr__(self, "_specs", specs)
 
@@ -475,12 +481,7 @@ class Parameters(Mapping):
         # (in declaration order, unknown names last: the first error is the one a full check raises)
         order = changes if len(changes) < 2 else (
             [k for k in specs if k in changes] + [k for k in changes if k not in specs])
-        for key in order:
-            spec = specs.get(key)
-            if spec is None:
-                raise ParameterError(f"unknown parameter {key!r}: {close_matches_hint(key, specs)}")
-            values[key] = _check_value(spec, changes[key])
-        _check_together(values)
+        _check_into(values, specs, changes, order)
         new = object.__new__(Parameters)
         object.__setattr__(new, "_values", values)
         object.__setattr__(new, "_specs", specs)

@@ -543,11 +543,16 @@ class Diagnosis:
             selected, current = list(rest), cal
         return selected, current, removed
 
+    def _settings(self) -> "Diagnosis":
+        """A copy with the settings only, sent to worker processes (a fitted Diagnosis carries its results)."""
+        light = copy.copy(self)
+        light.__dict__ = {k: v for k, v in self.__dict__.items() if not k.endswith("_")}
+        return light
+
     def _run_calibrations(self, args, pool) -> list:
         """:meth:`_calibrate` on each argument tuple (in the pool when given); None for one that failed."""
         if pool is not None:
-            light = copy.copy(self)
-            light.__dict__ = {k: v for k, v in self.__dict__.items() if not k.endswith("_")}
+            light = self._settings()
             futures = [pool.submit(_calibrate_job, (light, a)) for a in args]
             outs = []
             for f in futures:
@@ -645,8 +650,7 @@ class Diagnosis:
         if pool is not None and len(names) > 1:
             # slowest first (the micro model, stick-slip), so that two workers finish together
             order = sorted(range(len(names)), key=lambda i: -_COST_RANK.get(names[i], 1))
-            light = copy.copy(self)  # the settings only: a Diagnosis fitted before carries its results
-            light.__dict__ = {k: v for k, v in self.__dict__.items() if not k.endswith("_")}
+            light = self._settings()
             futures = {i: pool.submit(_refit_job, (light, args[i])) for i in order}
             outs = [futures[i].result() for i in range(len(names))]
         else:

@@ -14,10 +14,10 @@ import math
 import numpy as np
 
 from .compare import Comparison
+from .evidence import variance_inflation
 from .io import Measurement
 from .runner import kiln_angle
-from .evidence import variance_inflation
-from .stats import best_step, robust_sigma
+from .stats import best_step, median_step, robust_sigma
 
 __all__ = ["residual_signature", "standstill_offsets", "fit_points", "NARROWBAND_RATIO", "EVENT_TIMING_S",
            "MATERIAL_FIT_POINTS"]
@@ -99,11 +99,14 @@ def fit_points(measured, residual, where) -> float:
     y = np.asarray(measured, float)
     e = np.asarray(residual, float)
     dev = float(np.linalg.norm(y - y.mean()))
-    if dev == 0.0:
-        return 0.0
     total = float(e @ e)
-    rest = total - float(e[where] @ e[where])
-    return 100.0 * (math.sqrt(total) - math.sqrt(max(rest, 0.0))) / dev
+    return _points_gained(total, total - float(e[where] @ e[where]), dev)
+
+
+def _points_gained(total: float, rest: float, dev: float) -> float:
+    """Fit % points gained when a residual's squared norm falls from ``total`` to ``rest``, the measured
+    signal's deviation from its mean having norm ``dev`` (fit = 100 (1 - ||e|| / dev))."""
+    return 100.0 * (math.sqrt(total) - math.sqrt(max(rest, 0.0))) / dev if dev > 0 else 0.0
 
 
 def _timing_only(t, measured, model, where, limit: float) -> bool:
@@ -128,7 +131,7 @@ def _timing_only(t, measured, model, where, limit: float) -> bool:
     idx = np.flatnonzero(where)
     if idx.size == 0:
         return True
-    dt = float(np.median(np.diff(t))) if t.size > 1 else 0.0
+    dt = median_step(t) if t.size > 1 else 0.0
     span = max(EVENT_TIMING_S, dt * 1.01)
     for shift in np.linspace(-span, span, 2 * max(1, int(np.ceil(span / max(dt, 1e-9)))) * 4 + 1):
         shifted = np.interp(t[idx] - shift, t, model)
@@ -226,9 +229,7 @@ def residual_signature(comp: Comparison, n: float, steady_from: float | None = N
     peaked = spec["narrowband_ratio"] > NARROWBAND_RATIO and spec["narrowband_hz"] > 0.05
     # a regressor that explains a quarter of the residual names structure when that part matters (see above)
     y = ch.measured
-    dev = float(np.linalg.norm(y - y.mean()))
-    explained = (100.0 * math.sqrt(var) * (1.0 - math.sqrt(max(1.0 - r2[strongest], 0.0))) / dev
-                 if dev > 0 else 0.0)
+    explained = _points_gained(var, var * (1.0 - r2[strongest]), float(np.linalg.norm(y - y.mean())))
     correlated = r2[strongest] > 0.25 and explained >= MATERIAL_FIT_POINTS
     structured = bool(correlated or peaked or fails)
     hints = {
