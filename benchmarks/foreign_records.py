@@ -73,6 +73,7 @@ class PlantSpec:
     ar1: tuple = (5.0, 0.2, 0.3)       # AR(1) noise: current [A], speed [rpm], time constant [s]
     seed: int = 0
     note: str = ""
+    h: float = 5e-4                    # the plant's RK4 step [s] (1e-3 is enough where a test needs speed)
 
 
 def _rhs(x, t, c, mode):
@@ -217,7 +218,7 @@ def logged(spec: PlantSpec):
         ``t`` [s], ``i`` [A] (as the current sensor reads it), ``n`` [rpm] (as the speed sensor reads it),
         ``ref`` [rpm], ``events`` (mode changes of the burden).
     """
-    sim = simulate_plant(spec)
+    sim = simulate_plant(spec, spec.h)
     rng = np.random.default_rng(zlib.crc32(spec.name.encode()) + spec.seed)
     dt = 1.0 / spec.fs
     t = np.arange(-spec.pre_s, spec.t_end + 1e-9, dt)

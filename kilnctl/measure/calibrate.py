@@ -235,6 +235,7 @@ class _Problem:
         self.horizon_end = None  # record time [s] of the last fitted sample when the fit is on a shorter horizon
         self.t_act = measurement.t[active]
         self.cycles_from = None  # record time [s] from which the residual is phase-free (see cycle_residual)
+        self.timing = None  # BreakawayTiming: the falls of stick-slip cycles compared by their times (timing_residual)
 
     def set_smoothing(self, width_s: float) -> None:
         """Compare moving averages of ``width_s`` seconds of the residual (0: the residual itself)."""
@@ -298,6 +299,8 @@ class _Problem:
         mask = self.mask if mask is None else mask
         if self.cycles_from is not None:
             return self.cycle_residual(run, mask)
+        if self.timing is not None:
+            return self.timing_residual(run, mask)
         parts = []
         for c in CHANNELS:
             if run is None:
@@ -341,6 +344,25 @@ class _Problem:
                 co = _autocov(np.where(tail, run.outputs[c] - yo.mean(), 0.0), w, k_lo, k_hi)
                 # weighted like n_tail samples of the residual: sum over lags ~ n_tail (dC / s^2)^2
                 parts.append(math.sqrt(n_tail / (k_hi - k_lo + 1)) * (co - cm) / self.scales[c] ** 2)
+        return np.concatenate(parts)
+
+    def timing_residual(self, run: ModelRun | None, mask) -> np.ndarray:
+        """The scaled residual with the current's falls compared by their times (see :mod:`.breakaways`).
+
+        The current's samples around the record's stick-slip falls are left out; in their place, for each
+        paired fall, its time error weighted by what that error costs the simulation-error residual.  Where
+        the falls agree to a fraction of a sample the two residuals are nearly equal; further off, this one
+        changes smoothly with the parameters where the other has a cusp for every fall crossing a sample.
+        """
+        tm = self.timing
+        parts = []
+        for c in CHANNELS:
+            sel = mask & ~tm.near if c == "current_A" else mask
+            if run is None:
+                parts.append(np.full(int(sel.sum()), PENALTY))
+            else:
+                parts.append(((self.meas[c] - run.outputs[c]) / self.scales[c])[sel])
+        parts.append(np.full(tm.size, PENALTY) if run is None else tm.residual(run, self.scales["current_A"]))
         return np.concatenate(parts)
 
     def rss(self, run: ModelRun, mask=None) -> dict:
@@ -497,6 +519,7 @@ class _Search:
         self.horizon = 1.0
         self.log_coord = np.array([c[0].startswith("ln(") for c in space.coords], bool)
         self.cycles_from = None  # record time [s]: each local fit starts with a phase-free stage (cycle_stage)
+        self.n_timed = 0  # falls compared by their times in the last timing stage (timing_stage)
 
     def trial(self, u) -> _Trial:
         key = np.asarray(u, float).tobytes()
@@ -537,6 +560,7 @@ class _Search:
             start, J, msg = u, np.zeros((0, 0)), "nothing to fit"
             if self.cycles_from is not None and self.space.coords:
                 u = self.cycle_stage(u)
+                u = self.timing_stage(u)
             for i, h in enumerate(hs):
                 if not self.space.coords:
                     break
@@ -569,6 +593,32 @@ class _Search:
         finally:
             self.prob.cycles_from = None
             self.cache.clear()
+        return u
+
+    def timing_stage(self, u):
+        """A local fit on the whole record with the stick-slip falls compared by their times
+        (:meth:`_Problem.timing_residual`), from the phase-free stage's values: it aligns every fall, from where
+        the simulation-error fits only polish.  Skipped when the record or the model at u has fewer than two
+        falls after the ramp."""
+        from .breakaways import BreakawayTiming
+
+        self.set_horizon(1.0)
+        self.set_smoothing(0.0)
+        run = self.trial(u).run
+        if run is None:
+            return u
+        timing = BreakawayTiming.pair(self.t_act, self.prob.meas["current_A"], run, t0=self.t0,
+                                      t_from=self.cycles_from, mask=self.full_mask)
+        if timing is None:
+            return u
+        self.prob.timing = timing
+        self.cache.clear()
+        try:
+            u, _, _ = self.local(u, tol=self.tol)
+        finally:
+            self.prob.timing = None
+            self.cache.clear()
+        self.n_timed = timing.size
         return u
 
     def local(self, u, tol=None):
