@@ -519,7 +519,6 @@ class _Search:
         self.horizon = 1.0
         self.log_coord = np.array([c[0].startswith("ln(") for c in space.coords], bool)
         self.cycles_from = None  # record time [s]: each local fit starts with a phase-free stage (cycle_stage)
-        self.n_timed = 0  # falls compared by their times in the last timing stage (timing_stage)
 
     def trial(self, u) -> _Trial:
         key = np.asarray(u, float).tobytes()
@@ -581,19 +580,24 @@ class _Search:
         prob.deadline = None
         return out
 
-    def cycle_stage(self, u):
-        """A local fit of the phase-free residual on the whole record (see _Problem.cycle_residual): it sets
-        the cycles' period, amplitude and mean level, from where the simulation-error fits track their phase."""
+    def _local_with(self, attribute: str, value, u):
+        """A local fit on the whole record with the problem's residual switched by ``attribute`` = ``value``
+        (``cycles_from`` or ``timing``), switched back afterwards whatever happens."""
         self.set_horizon(1.0)
         self.set_smoothing(0.0)
-        self.prob.cycles_from = self.cycles_from
+        setattr(self.prob, attribute, value)
         self.cache.clear()
         try:
             u, _, _ = self.local(u, tol=self.tol)
         finally:
-            self.prob.cycles_from = None
+            setattr(self.prob, attribute, None)
             self.cache.clear()
         return u
+
+    def cycle_stage(self, u):
+        """A local fit of the phase-free residual on the whole record (see _Problem.cycle_residual): it sets
+        the cycles' period, amplitude and mean level, from where the simulation-error fits track their phase."""
+        return self._local_with("cycles_from", self.cycles_from, u)
 
     def timing_stage(self, u):
         """A local fit on the whole record with the stick-slip falls compared by their times
@@ -611,15 +615,7 @@ class _Search:
                                       t_from=self.cycles_from, mask=self.full_mask)
         if timing is None:
             return u
-        self.prob.timing = timing
-        self.cache.clear()
-        try:
-            u, _, _ = self.local(u, tol=self.tol)
-        finally:
-            self.prob.timing = None
-            self.cache.clear()
-        self.n_timed = timing.size
-        return u
+        return self._local_with("timing", timing, u)
 
     def local(self, u, tol=None):
         """One trust-region fit from u; coordinates without influence at u stay where they are
@@ -883,7 +879,11 @@ class Calibration:
             stick-slip): when their period is slightly off they drift out
             of phase, and the simulation-error cost has a valley for every
             whole number of cycles; their period, amplitude and level
-            change smoothly with the parameters.
+            change smoothly with the parameters.  Then a timing stage on
+            the whole record: the current's samples around the record's
+            stick-slip falls replaced by the time errors of the model's
+            burden switches (:class:`~kilnctl.measure.breakaways.BreakawayTiming`;
+            skipped when fewer than two falls are found after the ramp).
 
         Returns
         -------

@@ -169,7 +169,9 @@ class Burden(Component):
                   "phase-free stage (the cycles' mean level and autocovariance after the ramp): the cost of a long "
                   "run of stick-slip cycles is rugged, a valley for every whole number of cycles. A breakaway "
                   "misplaced in time costs in proportion to the shift (a cusp at the right friction): after the "
-                  "stage each fit runs on a residual smoothed over 0.4 s, then 0.1 s, then none.",
+                  "stage a timing stage compares the current's falls by the model's switch times "
+                  "(measure/breakaways.py), then each fit runs on a residual smoothed over 0.4 s, then 0.1 s, "
+                  "then none.",
             horizons="after_first_failure", separation=0.04, smoothing=(0.4, 0.1)),
     )
     requires = ("kiln",)
