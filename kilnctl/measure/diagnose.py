@@ -42,6 +42,7 @@ from ..simulate import resolve_gains
 from .calibrate import Calibration, Smoothing, default_starts, holdout_masks
 from .compare import compare_run
 from .effects import CATALOGUE, DEFAULT_CALIBRATE, effect_components, grid_starts
+from .breakaways import breakaways
 from .io import Measurement
 from .evidence import holdout_z, whitened_delta_bic
 from .runner import CHANNELS
@@ -55,6 +56,12 @@ __all__ = ["Diagnosis", "CandidateResult", "residual_signature", "caution_texts"
 #: a refit of the current structure from a candidate's base values replaces the current model when it lowers
 #: the cost by more than this fraction [-] (see Diagnosis._reanchor)
 REANCHOR_GAIN = 1e-3
+#: the effect tried together with each other candidate when no single one is supported but the record shows
+#: stick-slip falls the model lacks: its cycles and a second effect can hide each other (a current limit that
+#: clips the cycles' peaks, a compliance that rings after each fall)
+PAIRED = "torque_friction_law"
+#: starting points of an effect's own parameters paired with the friction grid (see Diagnosis._refit)
+PAIRED_STARTS = 8
 
 
 @dataclass
@@ -437,6 +444,20 @@ class Diagnosis:
             if abrupt is not None:
                 self.abrupt_ = abrupt
                 break
+            if (not results or not results[0].supported) and PAIRED in names \
+                    and self._stick_slip_missing(m, current, exp):
+                pairs = self._try_pairs(m, params, selected, names, current, scales, train, test, exp, pool, say)
+                rounds.append(pairs)
+                if pairs and pairs[0].supported:
+                    best = pairs[0]
+                    fitted[tuple(sorted(selected))] = current
+                    for e in best.effect.split("+"):
+                        selected.append(e)
+                        added[e] = best
+                    current = best.calibration
+                    fitted[tuple(sorted(selected))] = current
+                    say(f"added {best.effect}")
+                    continue
             if not results or not results[0].supported:
                 break
             best = results[0]
@@ -490,6 +511,33 @@ class Diagnosis:
         say(f"final: {_fmt_fit(self.final_)} with {', '.join(selected) or 'no effect added'} "
             f"({self.wall_s_:.1f} s)")
         return self
+
+    def _stick_slip_missing(self, m, current, exp) -> bool:
+        """True when the record's current falls sharply again and again after the ramp (stick-slip
+        breakaways, :func:`~kilnctl.measure.breakaways.breakaways`) and the current model's current does so
+        less than half as often."""
+        active = m.t >= exp.t0 - 1e-9
+        t = m.t[active]
+        t_from = exp.t0 + (exp.omega_ref / exp.ramp_rate if exp.ramp_rate > 0 else 0.0) + 1.5
+        rec = breakaways(t, m.current[active], t_from=t_from)
+        if rec.size < 2:
+            return False
+        return breakaways(t, current.run_.outputs["current_A"], t_from=t_from, threshold=rec.threshold).size \
+            < rec.size / 2
+
+    def _try_pairs(self, m, params, selected, names, current, scales, train, test, exp, pool, say) -> list:
+        """The torque friction law (:data:`PAIRED`) refitted together with each other candidate, each pair
+        judged against the current model like one candidate (its result named ``law+effect``)."""
+        say(f"  no single effect is supported, but the record's current falls like stick-slip cycles the model "
+            f"lacks: {PAIRED} tried together with each other candidate")
+        others = [n for n in names if n != PAIRED]
+        results = self._try_all(m, params, list(selected) + [PAIRED], others, current, scales, train, test, exp,
+                                pool, say, {})
+        for r in results:
+            r.effect = f"{PAIRED}+{r.effect}"
+            r.reason = f"together with {PAIRED} (neither is supported alone): {r.reason}"
+        results.sort(key=_rank)
+        return results
 
     def _backward(self, m, params, selected, current, fitted, scales, train, test, exp, pool, say):
         """Backward check of the greedy selection: every selected effect must still earn its place.
@@ -618,6 +666,15 @@ class Diagnosis:
         # the base values from the current model and from the setup: the current model's calibration may sit
         # in a regime (e.g. of the burden friction) that only made up for the missing effect
         setup_base = {k: float(params[k]) for k in self.calibrate if k in init}
+        if name != PAIRED and self._rugged(tuple(selected)):
+            # stick-slip already in the model: its friction (mu_c, mu_s) may sit in a valley that only made up
+            # for the missing effect, and a valley of the pair lies elsewhere in both.  The effect's own starts
+            # (a few, evenly chosen) each with a coarse grid of the friction
+            own = eff.usual_starts() + list(eff.starts(p, m))
+            own = [own[i] for i in np.unique(np.linspace(0, len(own) - 1, PAIRED_STARTS).round().astype(int))] \
+                if own else [{}]
+            effect_starts = effect_starts + [dict(f, **g) for f in _torque_law_starts(init.get("mu_c", p.mu_c))[::3]
+                                             for g in own]
         n_local = None
         rugged = self._rugged(effects)
         if rugged:

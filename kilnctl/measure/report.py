@@ -29,7 +29,7 @@ __all__ = ["figure_tag", "table", "page", "write_report_files", "esc", "json_num
            "diagnosis_html", "write_diagnosis_report", "write_comparison_report", "comparison_html",
            "diagnosis_plain_headline", "uncertainty_words", "how_to_read", "settings_table", "parameter_table",
            "figure_block", "record_name_of", "HOW_TO_READ", "pretty_unit", "value_pair", "png_bytes", "write_page_files",
-           "report_page", "candidate_dict", "candidate_verdict", "greedy_order", "SUMMARY_WIDTH"]
+           "report_page", "candidate_dict", "candidate_verdict", "greedy_order", "round_model", "SUMMARY_WIDTH"]
 
 _CSS = """
 *{box-sizing:border-box}
@@ -365,6 +365,27 @@ def greedy_order(d) -> list[str]:
     return [rnd[0].effect for rnd in d.rounds_ if rnd and rnd[0].supported]
 
 
+def round_model(d, i: int, base: str = "the base") -> str:
+    """What the candidates of round ``i`` were judged against: ``base``, or "base + " the effects the earlier
+    rounds added (a round that added nothing adds nothing to the list: a round of pairs can follow it).
+
+    Parameters
+    ----------
+    d : Diagnosis
+        A fitted diagnosis.
+    i : int
+        Index of the round in ``d.rounds_``.
+    base : str
+        Words for the base model.
+
+    Returns
+    -------
+    str
+    """
+    before = [rnd[0].effect for rnd in d.rounds_[:i] if rnd and rnd[0].supported]
+    return base if not before else "base + " + ", ".join(before)
+
+
 def candidate_verdict(d, i: int, r) -> tuple[str, str]:
     """What became of a candidate of a diagnosis round, and why.
 
@@ -547,11 +568,10 @@ def diagnosis_summary(d) -> str:
     lines += _wrap("dBIC: BIC change on the fitted part (negative favours the effect; plain and with the "
                    "residual's coloured noise modelled, 'whitened'); held-out: error reduction on the part not "
                    "fitted [%]; fit\u00a0I: current fit on the fitted part [%]", "  ")
-    order = greedy_order(d)
     head = f"    {'effect':<22} {'dBIC':>9} {'whitened dBIC':>14} {'held-out':>9} {'fit I':>6}  verdict"
     for i, rnd in enumerate(d.rounds_):
         lines.append(f"  round {i + 1}: candidates against "
-                     + ("the base" if i == 0 else "base + " + ", ".join(order[:i])))
+                     + round_model(d, i))
         lines.append(head)
         lines += [x for r in rnd for x in _summary_rows(r, *candidate_verdict(d, i, r))]
     removed = getattr(d, "removed_", None) or []
@@ -995,12 +1015,10 @@ def diagnosis_html(d, figs=None) -> str:
     parts.append(figure_block(f_rank, "ranking", "Green: supported (both tests passed); grey: not supported. "
                               "Left: dBIC, plain (solid) and whitened (hatched), the round-1 table's two dBIC "
                               "columns. Dotted lines: the thresholds."))
-    order = greedy_order(d)
     header = ["effect", "dBIC", "whitened dBIC", "held-out gain [%]", "current fit [%]", "effect parameters",
               "verdict and why"]
     for i, rnd in enumerate(d.rounds_):
-        parts.append(f"<h3>Round {i + 1}: against " + esc("the calibrated base" if i == 0 else
-                                                          "base + " + ", ".join(order[:i])) + "</h3>")
+        parts.append(f"<h3>Round {i + 1}: against " + esc(round_model(d, i, "the calibrated base")) + "</h3>")
         verdicts = [candidate_verdict(d, i, r) for r in rnd]
         rows = [_candidate_row(r, *v) for r, v in zip(rnd, verdicts)]
         sel = {j for j, (v, _) in enumerate(verdicts) if v == "added"}
