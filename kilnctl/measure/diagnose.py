@@ -441,23 +441,27 @@ class Diagnosis:
                                                   say)
             abrupt = self._outside(m, params, selected, current, results, scales, train, test, exp, say)
             rounds.append(results)
-            if abrupt is not None:
-                self.abrupt_ = abrupt
-                break
-            if (not results or not results[0].supported) and PAIRED in names \
+            pairs = None
+            # stick-slip falls can pass for an abrupt change (each one a step of the current): the pairs first
+            if (abrupt is not None or not results or not results[0].supported) and PAIRED in names \
                     and self._stick_slip_missing(m, current, exp):
                 pairs = self._try_pairs(m, params, selected, names, current, scales, train, test, exp, pool, say)
+            if pairs is not None:
                 rounds.append(pairs)
-                if pairs and pairs[0].supported:
+                if pairs and pairs[0].supported and (abrupt is None or pairs[0].delta_bic < abrupt["delta_bic"]):
                     best = pairs[0]
                     fitted[tuple(sorted(selected))] = current
                     for e in best.effect.split("+"):
-                        selected.append(e)
-                        added[e] = best
+                        if e not in selected:
+                            selected.append(e)
+                            added[e] = best
                     current = best.calibration
                     fitted[tuple(sorted(selected))] = current
                     say(f"added {best.effect}")
                     continue
+            if abrupt is not None:
+                self.abrupt_ = abrupt
+                break
             if not results or not results[0].supported:
                 break
             best = results[0]
