@@ -532,14 +532,14 @@ class Diagnosis:
     def _try_pairs(self, m, params, selected, names, current, scales, train, test, exp, pool, say) -> list:
         """The torque friction law (:data:`PAIRED`) refitted together with each other candidate, each pair
         judged against the current model like one candidate (its result named ``law+effect``)."""
-        say(f"  no single effect is supported, but the record's current falls like stick-slip cycles the model "
-            f"lacks: {PAIRED} tried together with each other candidate")
+        say(f"  no single effect is supported (or an abrupt change explains more), but the record's current "
+            f"falls like stick-slip cycles the model lacks: {PAIRED} tried together with each other candidate")
         others = [n for n in names if n != PAIRED]
         results = self._try_all(m, params, list(selected) + [PAIRED], others, current, scales, train, test, exp,
                                 pool, say, {})
         for r in results:
             r.effect = f"{PAIRED}+{r.effect}"
-            r.reason = f"together with {PAIRED} (neither is supported alone): {r.reason}"
+            r.reason = f"together with {PAIRED} (refitted as a pair): {r.reason}"
         results.sort(key=_rank)
         return results
 
