@@ -209,7 +209,8 @@ class BreakawayTiming:
         Returns
         -------
         BreakawayTiming or None
-            None when the record or the model has fewer than two falls after ``t_from`` (nothing to pair).
+            None when the record or the model has fewer than two falls after ``t_from``, or no pair lies
+            wholly in the fitted samples (nothing to compare).
         """
         t = np.asarray(t, float)
         rec = breakaways(t, current, t_from=t_from)
@@ -246,7 +247,7 @@ class BreakawayTiming:
             near |= w_rec
             keep.append(k)
             weights.append(float(np.sqrt(np.sum(g[w_mod] ** 2))))
-        if not keep:
+        if not keep or not np.all(np.isfinite(weights)):
             return None
         spacing = float(np.median(np.diff(t_record)))
         return cls(t_record[keep], ordinals[keep], np.asarray(weights), near, 0.5 * spacing, lag, float(t0),

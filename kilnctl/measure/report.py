@@ -362,7 +362,12 @@ def greedy_order(d) -> list[str]:
         The first candidate of each round that added one (a round adds its first-ranked candidate when
         it is supported).
     """
-    return [rnd[0].effect for rnd in d.rounds_ if rnd and rnd[0].supported]
+    return _added_in(d.rounds_)
+
+
+def _added_in(rounds) -> list[str]:
+    """The first candidate of each of ``rounds`` that added one (it is supported)."""
+    return [rnd[0].effect for rnd in rounds if rnd and rnd[0].supported]
 
 
 def round_model(d, i: int, base: str = "the base") -> str:
@@ -382,7 +387,7 @@ def round_model(d, i: int, base: str = "the base") -> str:
     -------
     str
     """
-    before = [rnd[0].effect for rnd in d.rounds_[:i] if rnd and rnd[0].supported]
+    before = _added_in(d.rounds_[:i])
     return base if not before else "base + " + ", ".join(before)
 
 
