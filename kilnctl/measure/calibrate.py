@@ -29,6 +29,7 @@ import numpy as np
 from ..errors import KilnctlError, ModelError, NotFittedError
 from ..params import Parameters
 from ..simulate import resolve_gains
+from .breakaways import BreakawayTiming
 from .effects import DEFAULT_CALIBRATE, FreeParameter, free_parameter
 from .io import Experiment, Measurement
 from .runner import CHANNELS, ModelRun, run_model
@@ -604,8 +605,6 @@ class _Search:
         (:meth:`_Problem.timing_residual`), from the phase-free stage's values: it aligns every fall, from where
         the simulation-error fits only polish.  Skipped when the record or the model at u has fewer than two
         falls after the ramp."""
-        from .breakaways import BreakawayTiming
-
         self.set_horizon(1.0)
         self.set_smoothing(0.0)
         run = self.trial(u).run
@@ -908,7 +907,7 @@ class Calibration:
         prob.deadline = None if self.time_limit_s is None else t_wall + self.time_limit_s
         search = _Search(prob, space, measurement.t[active], exp.t0, self.diff_step, self.max_nfev, self.tol)
         if cycles:
-            search.cycles_from = exp.t0 + (exp.omega_ref / exp.ramp_rate if exp.ramp_rate > 0 else 0.0) + 1.5
+            search.cycles_from = exp.steady_from
         u0s = [space.encode(v) for v in starts.points_from(space.reported, start_vals)]
         search.set_horizon(horizons.schedule()[0])
         search.set_smoothing(smoothing.schedule()[0])

@@ -446,28 +446,22 @@ class Diagnosis:
             if (abrupt is not None or not results or not results[0].supported) and PAIRED in names \
                     and self._stick_slip_missing(m, current, exp):
                 pairs = self._try_pairs(m, params, selected, names, current, scales, train, test, exp, pool, say)
+            best = None
             if pairs is not None:
                 rounds.append(pairs)
                 if pairs and pairs[0].supported and (abrupt is None or pairs[0].delta_bic < abrupt["delta_bic"]):
                     best = pairs[0]
-                    fitted[tuple(sorted(selected))] = current
-                    for e in best.effect.split("+"):
-                        if e not in selected:
-                            selected.append(e)
-                            added[e] = best
-                    current = best.calibration
-                    fitted[tuple(sorted(selected))] = current
-                    say(f"added {best.effect}")
-                    continue
-            if abrupt is not None:
-                self.abrupt_ = abrupt
-                break
-            if not results or not results[0].supported:
-                break
-            best = results[0]
-            selected.append(best.effect)
-            added[best.effect] = best
-            fitted[tuple(sorted(selected[:-1]))] = current
+            if best is None:
+                if abrupt is not None:
+                    self.abrupt_ = abrupt
+                    break
+                if not results or not results[0].supported:
+                    break
+                best = results[0]
+            fitted[tuple(sorted(selected))] = current
+            for e in best.effect.split("+"):  # a pair adds both of its effects
+                selected.append(e)
+                added[e] = best
             current = best.calibration
             fitted[tuple(sorted(selected))] = current
             say(f"added {best.effect}")
@@ -494,8 +488,7 @@ class Diagnosis:
         fm, fcomps, _, _ = self._structure(params, tuple(selected))
         self.comparison_final_ = compare_run(m, final.run_, exp, model=fm, effects=tuple(selected),
                                              params=final.params_)
-        steady = exp.t0 + (exp.omega_ref / exp.ramp_rate if exp.ramp_rate > 0 else 0.0) + 1.5
-        self.signature_ = residual_signature(self.comparison_final_, params.n, steady_from=steady)
+        self.signature_ = residual_signature(self.comparison_final_, params.n, steady_from=exp.steady_from)
         self.unexplained_ = self.signature_ if self.signature_["structured"] else None
         if self.abrupt_ is not None:
             self.unexplained_ = dict(self.signature_, structured=True, hint=self.abrupt_["text"],
@@ -522,12 +515,11 @@ class Diagnosis:
         less than half as often."""
         active = m.t >= exp.t0 - 1e-9
         t = m.t[active]
-        t_from = exp.t0 + (exp.omega_ref / exp.ramp_rate if exp.ramp_rate > 0 else 0.0) + 1.5
-        rec = breakaways(t, m.current[active], t_from=t_from)
+        rec = breakaways(t, m.current[active], t_from=exp.steady_from)
         if rec.size < 2:
             return False
-        return breakaways(t, current.run_.outputs["current_A"], t_from=t_from, threshold=rec.threshold).size \
-            < rec.size / 2
+        return breakaways(t, current.run_.outputs["current_A"], t_from=exp.steady_from,
+                          threshold=rec.threshold).size < rec.size / 2
 
     def _try_pairs(self, m, params, selected, names, current, scales, train, test, exp, pool, say) -> list:
         """The torque friction law (:data:`PAIRED`) refitted together with each other candidate, each pair
@@ -797,8 +789,7 @@ class Diagnosis:
             return None
         active = m.t >= exp.t0 - 1e-9
         t = m.t[active]
-        ramp_end = exp.t0 + (exp.omega_ref / exp.ramp_rate if exp.ramp_rate > 0 else 0.0)
-        window = (ramp_end + 1.5, float(t[-1]) - 2.0)
+        window = (exp.steady_from, float(t[-1]) - 2.0)
         if window[1] <= window[0]:
             return None
         model, comps, p, free = self._structure(params, tuple(selected))

@@ -50,6 +50,10 @@ GAP_FACTOR = 5.0
 
 
 
+#: time after the ramp's end for the speed loop to settle [s] (see Experiment.steady_from)
+SETTLE_S = 1.5
+
+
 @dataclass(frozen=True)
 class Experiment:
     """What the simulation of a record must reproduce: start time and speed reference.
@@ -74,6 +78,18 @@ class Experiment:
     omega_ref: float
     source: str
     notes: tuple = ()
+
+    @property
+    def ramp_end(self) -> float:
+        """Record time at which the speed reference reaches ``omega_ref`` [s] (``t0`` without a ramp)."""
+        return self.t0 + (self.omega_ref / self.ramp_rate if self.ramp_rate > 0 else 0.0)
+
+    @property
+    def steady_from(self) -> float:
+        """Record time from which the drive runs at its set speed [s]: the ramp's end plus
+        :data:`SETTLE_S` for the speed loop to settle (stick-slip cycles, abrupt changes and the residual's
+        signature are looked for from there)."""
+        return self.ramp_end + SETTLE_S
 
     def to_dict(self) -> dict:
         """Return the experiment as a JSON-ready dictionary."""
