@@ -551,35 +551,61 @@ class _Search:
         return _forward_jacobian(self.fun, u, self.diff_step, self.space.upper)
 
     def fit_all(self, firsts, horizons: Horizons, smoothing: Smoothing) -> list[_Local]:
-        """A local fit from each starting point through every horizon and smoothing width."""
+        """A local fit from each starting point through every horizon and smoothing width.
+
+        With stick-slip cycles (``cycles_from`` set) each local fit begins with the phase-free stage and
+        the timing stage.  They bring cycles that drift out of phase back into step, but from a start whose
+        cycles are already in step (a candidate refitted from a model whose friction fits) they can lead into
+        another valley: when the staged fit ends above the cost it started from, the fit is run again from
+        the same start without the stages, and the lower end is kept.
+        """
         prob, out = self.prob, []
         hs = horizons.schedule()
         for u in firsts:
             if out and prob.deadline is not None and time.perf_counter() > prob.deadline:
                 break  # out of time: no further local fit
-            start, J, msg = u, np.zeros((0, 0)), "nothing to fit"
+            start = u
             if self.cycles_from is not None and self.space.coords:
-                u = self.cycle_stage(u)
-                u = self.timing_stage(u)
-            for i, h in enumerate(hs):
-                if not self.space.coords:
-                    break
-                self.set_horizon(h)
-                if i > 0:
-                    u = self.probe(u)
-                for w in smoothing.schedule(first=i == 0, last=i == len(hs) - 1):
-                    self.set_smoothing(w)
-                    u, J, msg = self.local(u)
-            if self.horizon < 1.0:  # nothing to fit: the end is still judged on the whole record
-                self.set_horizon(1.0)
-            self.set_smoothing(0.0)
-            deadline, prob.deadline = prob.deadline, None  # the end of a fit is always evaluated
-            end = self.trial(u)
+                start_cost = self._end(u).cost
+                u, J, msg = self._through(self.timing_stage(self.cycle_stage(u)), hs, smoothing)
+                end_cost = self._end(u).cost
+                if not end_cost <= start_cost:
+                    u2, J2, msg2 = self._through(start, hs, smoothing)
+                    if self._end(u2).cost < end_cost:
+                        u, J, msg = u2, J2, f"{msg2} (without the phase-free and timing stages)"
+            else:
+                u, J, msg = self._through(u, hs, smoothing)
+            end = self._end(u)
             out.append(_Local(u, J, msg, end.cost, start, prob.fits(end.run) if end.run is not None else {}))
-            prob.deadline = deadline
         self.set_smoothing(0.0)
         prob.deadline = None
         return out
+
+    def _through(self, u, hs, smoothing):
+        """The simulation-error fits from u through every horizon and smoothing width: (u, J, message)."""
+        J, msg = np.zeros((0, 0)), "nothing to fit"
+        for i, h in enumerate(hs):
+            if not self.space.coords:
+                break
+            self.set_horizon(h)
+            if i > 0:
+                u = self.probe(u)
+            for w in smoothing.schedule(first=i == 0, last=i == len(hs) - 1):
+                self.set_smoothing(w)
+                u, J, msg = self.local(u)
+        return u, J, msg
+
+    def _end(self, u) -> _Trial:
+        """The trial at u judged as the end of a fit: the whole record, no smoothing, past any deadline."""
+        if self.horizon < 1.0:
+            self.set_horizon(1.0)
+        if self.prob.smooth_n > 1:
+            self.set_smoothing(0.0)
+        deadline, self.prob.deadline = self.prob.deadline, None  # the end of a fit is always evaluated
+        try:
+            return self.trial(u)
+        finally:
+            self.prob.deadline = deadline
 
     def _local_with(self, attribute: str, value, u):
         """A local fit on the whole record with the problem's residual switched by ``attribute`` = ``value``

@@ -1,0 +1,53 @@
+"""A candidate refitted against a stick-slip model whose friction already fits (calibrate._Search.fit_all).
+
+Truth: a record of the independently written plant in benchmarks/foreign_records.py (numpy, its own
+stick-slip state machine) with the torque friction law and a Coulomb torque of 100 N m on the motor shaft;
+kilnctl's model with the plant's own values gives the fit a refit must reach.
+"""
+
+import numpy as np
+import pytest
+
+
+@pytest.fixture(scope="module")
+def coulomb_stick_slip(tmp_path_factory):
+    """40 s at 10 Hz of the foreign plant: torque-law stick-slip and a motor-side Coulomb torque of 100 N m."""
+    from benchmarks import foreign_records as fr
+    from kilnctl.measure import load_setup, read_record
+
+    folder = tmp_path_factory.mktemp("coulomb_stick_slip")
+    spec = fr.PlantSpec("tc100", 40.0, 10.0, base=dict(fr._NUIS), setup_kiln=dict(friction_law="torque"),
+                        effects={"coulomb": {"T": 100.0}}, layout="plain", h=1e-3)
+    truth = fr.write_record(spec, folder)
+    setup = load_setup(folder / "tc100.toml")
+    m = read_record(truth["csv"], setup.params, columns=truth["columns"])
+    return m, setup.params, truth
+
+
+def test_effect_refit_from_a_fitted_stick_slip_model_reaches_the_true_structure(coulomb_stick_slip):
+    # truth: the fit of kilnctl's model with the motor Coulomb friction at the plant's own values (97.4 %).
+    # The model without it (the setup states the torque law) fitted first, as a diagnosis round does: its
+    # m_v and J_v make up for part of the missing torque and its stick-slip cycles are in step with the
+    # record's.  From there the phase-free and timing stages of every local fit led into poorer valleys
+    # (93.7-95.3 %) and the refit returned its start with T_cm at the null value (95.8 %): the effect went
+    # unseen.  When a staged local fit ends above its start, the same fit is now run without the stages
+    # and the lower end is kept: 97.2 %, T_cm = 86 N m.
+    from kilnctl.measure import compare
+    from kilnctl.measure.diagnose import CHANNELS, Diagnosis
+    from kilnctl.measure.runner import run_model
+
+    m, params, truth = coulomb_stick_slip
+    d = Diagnosis(params)
+    exp = m.experiment(params)
+    model, comps, p, _ = d._structure(params, ("motor_coulomb_friction",))
+    true_fit = compare(m, p.replace(T_cm=100.0, **truth["base"]), model=model, effects=comps).fit["current_A"]
+    act = m.t >= exp.t0 - 1e-9
+    run = run_model(params.replace(**truth["base"]), m, exp)
+    scales = {c: float(np.sqrt(np.mean((m.channels[c][act] - run.outputs[c]) ** 2))) for c in CHANNELS}
+    without = d._calibrate(m, params, (), scales, None, dict(truth["base"]), [], exp, None, None, 1)
+    cal, error, _ = d._refit(m, params, [], "motor_coulomb_friction", dict(without.values_), None, scales,
+                             None, exp)
+    assert error is None
+    assert without.fit_percent_["current_A"] < true_fit - 1.0  # the effect is visible in the record
+    assert cal.fit_percent_["current_A"] > true_fit - 0.5
+    assert 75.0 < cal.values_["T_cm"] < 125.0
