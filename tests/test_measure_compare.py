@@ -238,3 +238,7 @@ def test_strategies_schedule_horizons_and_widths():
     u = [np.array([0.0]), np.array([0.5]), np.array([3.0]), np.array([0.6])]
     # the given point, the best of the rest however close (0.5), then the next that lies apart (3.0, not 0.6)
     assert [float(x[0]) for x in Starts(None, 3, 1.0).choose(u, [9.0, 1.0, 3.0, 2.0])] == [0.0, 0.5, 3.0]
+    # a grid point equal to the given one is not chosen again (its local fit would repeat the given one's):
+    # the best of the rest is then the next point, 0.5
+    u2 = [np.array([0.0]), np.array([0.0]), np.array([0.5]), np.array([3.0])]
+    assert [float(x[0]) for x in Starts(None, 3, 1.0).choose(u2, [9.0, 1.0, 2.0, 3.0])] == [0.0, 0.5, 3.0]

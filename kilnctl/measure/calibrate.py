@@ -392,7 +392,9 @@ class Starts:
     fits run from the given values (when ``n_local > 1``), from the best
     point however close it lies (a narrow valley next to a good guess is
     common: a backlash impact, a current limit), and from the next best
-    that lie apart from those chosen.
+    that lie apart from those chosen.  A point equal to one already chosen
+    (a grid point at the given values) is passed over: its local fit would
+    repeat one that runs anyway.
 
     Attributes
     ----------
@@ -425,6 +427,8 @@ class Starts:
         for i in order:
             if i in given:
                 continue
+            if any(np.max(np.abs(u0s[i] - u0s[j]), initial=0.0) <= 1e-12 for j in given + chosen):
+                continue  # the same point again (a grid point at the given values): the same local fit
             if all(np.max(np.abs(u0s[i] - u0s[j])) > self.separation for j in chosen):
                 chosen.append(int(i))
             if len(given) + len(chosen) >= max(1, self.n_local):
