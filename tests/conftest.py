@@ -1,4 +1,4 @@
-"""Shared test helpers: loading a report page in headless Chromium."""
+"""Shared test helpers: loading a report page in headless Chromium; a record of the foreign plant."""
 
 import html
 import json
@@ -66,3 +66,23 @@ def load_in_chromium(tmp_path_factory):
         return json.loads(html.unescape(found.group(1)))
 
     return load
+
+
+def foreign_stick_slip_record(folder, name, effects=None):
+    """40 s at 10 Hz of the independently written plant (benchmarks/foreign_records.py) with torque-law
+    stick-slip and ``effects`` (that plant's forms), written into ``folder`` and read back.
+
+    Returns
+    -------
+    (Measurement, Parameters, dict)
+        The record, the setup's parameters (which state the torque law) and the truth.
+    """
+    from benchmarks import foreign_records as fr
+    from kilnctl.measure import load_setup, read_record
+
+    spec = fr.PlantSpec(name, 40.0, 10.0, base=dict(fr._NUIS), setup_kiln=dict(friction_law="torque"),
+                        effects=dict(effects or {}), layout="plain", h=1e-3)
+    truth = fr.write_record(spec, folder)
+    setup = load_setup(Path(folder) / f"{name}.toml")
+    m = read_record(truth["csv"], setup.params, columns=truth["columns"])
+    return m, setup.params, truth

@@ -55,16 +55,9 @@ def test_detector_ignores_noise_and_the_ramp():
 @pytest.fixture(scope="module")
 def foreign_stick_slip(tmp_path_factory):
     """40 s at 10 Hz of the foreign plant with torque-law stick-slip (no further effect), its setup and truth."""
-    from benchmarks import foreign_records as fr
-    from kilnctl.measure import load_setup, read_record
+    from conftest import foreign_stick_slip_record
 
-    folder = tmp_path_factory.mktemp("stick_slip")
-    spec = fr.PlantSpec("ss10", 40.0, 10.0, base=dict(fr._NUIS), setup_kiln=dict(friction_law="torque"),
-                        layout="plain", h=1e-3)
-    truth = fr.write_record(spec, folder)
-    setup = load_setup(folder / "ss10.toml")
-    m = read_record(truth["csv"], setup.params, columns=truth["columns"])
-    return m, setup.params, truth
+    return foreign_stick_slip_record(tmp_path_factory.mktemp("stick_slip"), "ss10")
 
 
 def test_falls_pair_with_the_models_switches_at_the_true_values(foreign_stick_slip):

@@ -12,16 +12,10 @@ import pytest
 @pytest.fixture(scope="module")
 def coulomb_stick_slip(tmp_path_factory):
     """40 s at 10 Hz of the foreign plant: torque-law stick-slip and a motor-side Coulomb torque of 100 N m."""
-    from benchmarks import foreign_records as fr
-    from kilnctl.measure import load_setup, read_record
+    from conftest import foreign_stick_slip_record
 
-    folder = tmp_path_factory.mktemp("coulomb_stick_slip")
-    spec = fr.PlantSpec("tc100", 40.0, 10.0, base=dict(fr._NUIS), setup_kiln=dict(friction_law="torque"),
-                        effects={"coulomb": {"T": 100.0}}, layout="plain", h=1e-3)
-    truth = fr.write_record(spec, folder)
-    setup = load_setup(folder / "tc100.toml")
-    m = read_record(truth["csv"], setup.params, columns=truth["columns"])
-    return m, setup.params, truth
+    return foreign_stick_slip_record(tmp_path_factory.mktemp("coulomb_stick_slip"), "tc100",
+                                     {"coulomb": {"T": 100.0}})
 
 
 def test_effect_refit_from_a_fitted_stick_slip_model_reaches_the_true_structure(coulomb_stick_slip):
