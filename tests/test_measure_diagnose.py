@@ -451,3 +451,27 @@ def test_a_current_offset_at_standstill_is_reported_and_a_clean_record_says_noth
     assert only["channel"] == "current_A"
     assert only["offset"] == pytest.approx(25.0, abs=2.0)  # 100 samples of 4 A noise: standard error 0.4 A
     assert f"{only['offset']:+.3g} A at standstill" in only["text"] and "sensor offset" in only["text"]
+
+
+def test_caution_when_a_rival_explains_the_record_about_as_well():
+    # truth: constructed rounds.  The winner's dBIC -500; a second supported candidate at -495 lies within the
+    # BIC threshold (10) of it -> one caution naming both; at -400 (100 apart) or not supported -> none
+    from kilnctl.measure.diagnose import CandidateResult
+
+    m, _ = make_record((), seed=0, t_end=4.0)
+
+    def diag(rival_dbic, rival_supported=True):
+        d = _selected("viscous_drag", -300.0)
+        win = d.rounds_[0][0]
+        rival = CandidateResult("motor_coulomb_friction", rival_dbic, 15.0, {}, {}, {}, [], [], rival_supported,
+                                "", 0.0, delta_bic_corrected=-250.0)
+        d.rounds_ = [[win, rival]]
+        d._added = {"viscous_drag": win}
+        return d._caveats(m, _exp(), SETUP)
+
+    close = diag(-495.0)
+    assert len(close) == 1
+    assert "viscous_drag was preferred to motor_coulomb_friction by a BIC difference of only 5.0" in close[0]
+    assert "-500.0 against -495.0" in close[0]
+    assert diag(-400.0) == []
+    assert diag(-495.0, rival_supported=False) == []
