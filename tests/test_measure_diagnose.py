@@ -475,3 +475,25 @@ def test_caution_when_a_rival_explains_the_record_about_as_well():
     assert "-500.0 against -495.0" in close[0]
     assert diag(-400.0) == []
     assert diag(-495.0, rival_supported=False) == []
+
+
+def test_rival_caution_of_a_pair_is_given_once():
+    # truth: constructed round of pairs.  The winning pair added two effects; a rival pair within the threshold
+    # differs in one effect -> one caution (not one per added effect); a rival made of selected effects only is
+    # no rival
+    from kilnctl.measure.diagnose import CandidateResult
+
+    m, _ = make_record((), seed=0, t_end=4.0)
+
+    def result(effect, dbic):
+        return CandidateResult(effect, dbic, 15.0, {}, {}, {}, [], [], True, "", 0.0, delta_bic_corrected=-250.0)
+
+    d = _selected("torque_friction_law", -300.0)
+    win = result("torque_friction_law+second_motor", -900.0)
+    d.selected_ = ["torque_friction_law", "second_motor"]
+    d.rounds_ = [[win, result("torque_friction_law+viscous_drag", -893.0), result("second_motor", -895.0)]]
+    d._added = {"torque_friction_law": win, "second_motor": win}
+    texts = d._caveats(m, _exp(), SETUP)
+    assert len(texts) == 1
+    assert texts[0].startswith("torque_friction_law+second_motor was preferred to torque_friction_law+viscous_drag "
+                               "by a BIC difference of only 7.0")

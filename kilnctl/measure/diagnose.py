@@ -624,6 +624,7 @@ class Diagnosis:
                 for c in rnd:
                     if c.supported and c.effect not in added:
                         added[c.effect] = c
+        judged = []
         for name in self.selected_:
             r = added.get(name)
             if r is None:
@@ -635,24 +636,27 @@ class Diagnosis:
             # still misses much, e.g. the torque law whose misplaced breakaways it takes for noise)
             corrected = r.delta_bic_corrected if not r.holdout_z > self.holdout_z else -math.inf
             out += caution_texts(name, span, period, eff.short_record_note, corrected, self.min_delta_bic)
-            out += self._rival_texts(name, r)
+            if not any(r is a for a in judged):  # a pair added both its effects: its rivals are named once
+                judged.append(r)
+                out += self._rival_texts(r)
             for note in eff.plausibility(self.final_calibration_.values_):
                 out.append(f"{name}: {note} (a value outside the usual range is reported, not refused)")
         return out
 
-    def _rival_texts(self, name, r) -> list[str]:
-        """A caution when another candidate of the round that added ``name`` was supported too and its dBIC
+    def _rival_texts(self, r) -> list[str]:
+        """A caution when another candidate of the round whose winner was ``r`` was supported too and its dBIC
         lies within the BIC threshold of the winner's: the record then hardly tells the two apart (a constant
-        motor friction and a drag at nearly constant speed differ only during the ramp)."""
+        motor friction and a drag at nearly constant speed differ only during the ramp).  A rival whose
+        effects were all selected (in a later round) is none."""
         rnd = next((rd for rd in self.rounds_ if any(c is r for c in rd)), [])
-        chosen = set(r.effect.split("+"))
+        kept = set(self.selected_) | set(r.effect.split("+"))
         out = []
         for c in rnd:
-            if c is r or not c.supported or set(c.effect.split("+")) & (set(self.selected_) | chosen):
+            if c is r or not c.supported or set(c.effect.split("+")) <= kept:
                 continue
             gap = c.delta_bic - r.delta_bic
             if 0.0 <= gap < self.min_delta_bic:
-                out.append(f"{name} was preferred to {c.effect} by a BIC difference of only {gap:.1f} (dBIC "
+                out.append(f"{r.effect} was preferred to {c.effect} by a BIC difference of only {gap:.1f} (dBIC "
                            f"{r.delta_bic:+.1f} against {c.delta_bic:+.1f}; the threshold is {self.min_delta_bic:g}):"
                            f" on this record the two change the current alike, and either may be the cause. A record "
                            f"where they act differently (another ramp rate or set speed) decides.")
