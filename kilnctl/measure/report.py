@@ -800,7 +800,8 @@ HOW_TO_READ = {
                                  "less than {holdout_z:g} standard errors. An effect is <b>supported</b> only when "
                                  "it passes both tests."),
     "cautions": ("cautions", "Where the evidence is weaker than the numbers suggest (a record shorter than the "
-                             "effect's period, a strongly autocorrelated residual). Read them before acting."),
+                             "effect's period, a strongly autocorrelated residual, another effect that explains the "
+                             "record about as well). Read them before acting."),
     "uncertainty": ("± values", "One standard error of a fitted value from the fit's curvature. \"not "
                                 "identifiable\" means the record does not pin the value down: other values fit "
                                 "as well."),
