@@ -647,7 +647,8 @@ class Diagnosis:
         """A caution when another candidate of the round whose winner was ``r`` was supported too and its dBIC
         lies within the BIC threshold of the winner's: the record then hardly tells the two apart (a constant
         motor friction and a drag at nearly constant speed differ only during the ramp).  A rival whose
-        effects were all selected (in a later round) is none."""
+        effects were all selected (in a later round) is none.  The winner has the lowest dBIC of the round's
+        supported candidates (:func:`_rank`), so a rival's gap is never negative."""
         rnd = next((rd for rd in self.rounds_ if any(c is r for c in rd)), [])
         kept = set(self.selected_) | set(r.effect.split("+"))
         out = []
@@ -655,7 +656,7 @@ class Diagnosis:
             if c is r or not c.supported or set(c.effect.split("+")) <= kept:
                 continue
             gap = c.delta_bic - r.delta_bic
-            if 0.0 <= gap < self.min_delta_bic:
+            if gap < self.min_delta_bic:
                 out.append(f"{r.effect} was preferred to {c.effect} by a BIC difference of only {gap:.1f} (dBIC "
                            f"{r.delta_bic:+.1f} against {c.delta_bic:+.1f}; the threshold is {self.min_delta_bic:g}):"
                            f" on this record the two change the current alike, and either may be the cause. A record "
