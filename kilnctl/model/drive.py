@@ -205,7 +205,8 @@ class DCMotor(Component):
         else:
             e.set_rate("x_a", (e.sig["e_a"] - p.R_a * e.sig["i_a"] - p.k_b * e.x["omega_motor"]) / p.L_a)
         e.add_output("i_a", e.sig["i_a"])
-        e.add_output("speed_rpm", e.x["omega_motor"] * RPM_PER_RAD_S)
+        # the speed the record logs: the motor's, or a sensor's reading of it (a component sets ``omega_log``)
+        e.add_output("speed_rpm", e.sig.get("omega_log", e.x["omega_motor"]) * RPM_PER_RAD_S)
 
 
 @register

@@ -19,13 +19,16 @@ from .catalogue import Effect, FreeParameter
 
 @register
 class SpeedSensorLag(Component):
-    """First-order lag of the speed measurement used by the controller.
+    """First-order lag of the speed sensor: the controller and the record see its reading.
 
-    d(omega_meas)/dt = (omega_m - omega_meas)/tau_s; the PID sees omega_meas.
+    d(omega_meas)/dt = (omega_m - omega_meas)/tau_s; the PID sees omega_meas,
+    and the model's ``speed_rpm`` output is omega_meas too (signal
+    ``omega_log``): a drive logs the speed feedback its controller uses
+    (the filtered tacho or encoder value), not the shaft's true speed.
     """
 
     name = "speed_sensor_lag"
-    summary = "controller sees the motor speed through a first-order lag tau_s"
+    summary = "controller and record see the motor speed through a first-order lag tau_s"
     param_names = ("tau_s",)
     parameters = (
         param("tau_s", 0.05, "s", "assumed: first-order lag of a tacho-generator with filter",
@@ -34,14 +37,16 @@ class SpeedSensorLag(Component):
     catalogue = (
         Effect(
             "speed_sensor_lag",
-            "The controller sees the motor speed through a first-order lag (tacho filter, encoder averaging).",
+            "The controller and the record see the motor speed through a first-order lag (tacho filter, encoder "
+            "averaging).",
             ("speed_sensor_lag",), {}, None,
             (FreeParameter("tau_s", 1e-4, 2.0, "log", 0.005),),
             "a less damped speed loop: current oscillation at the loop's crossover after the ramp starts and "
             "ends, larger overshoot of the speed; residual correlated with the speed error",
             starts=lambda params, m: [{"tau_s": 0.001}, {"tau_s": 0.003}, {"tau_s": 0.01}],
             plausible={"tau_s": (0.002, 0.006)}, null={"tau_s": 1e-4},
-            notes="the record's speed_rpm is read as the true motor speed; only the controller's copy lags. "
+            notes="the record's speed_rpm is read as the sensor's reading, as a drive logs its speed feedback: "
+                  "it lags the shaft like the controller's copy. "
                   "Large lags can destabilise the loop: such trial runs are cut short and count as a poor fit."),
     )
     requires = ("pid",)
@@ -52,6 +57,7 @@ class SpeedSensorLag(Component):
     def signals(self, e, mode):
         rate = (e.x["omega_motor"] - e.x["omega_meas"]) / e.p.tau_s
         e.sig["omega_fb"] = e.x["omega_meas"]
+        e.sig["omega_log"] = e.x["omega_meas"]
         e.sig["omega_fb_dot"] = rate
 
     def finish(self, e, mode):
