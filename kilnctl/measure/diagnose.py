@@ -45,7 +45,8 @@ from .effects import CATALOGUE, DEFAULT_CALIBRATE, effect_components, grid_start
 from .breakaways import breakaways
 from .io import Measurement
 from .evidence import holdout_z, whitened_delta_bic
-from .runner import CHANNELS
+from .oscillation import dominant_oscillation
+from .runner import CHANNELS, run_model
 from .signature import residual_signature, standstill_offsets
 from .stats import failing_intervals, fit_percent
 from . import report as _report
@@ -62,6 +63,10 @@ REANCHOR_GAIN = 1e-3
 PAIRED = "torque_friction_law"
 #: starting points of an effect's own parameters paired with the friction grid (see Diagnosis._refit)
 PAIRED_STARTS = 8
+#: a model's oscillation counts as the record's when their frequencies differ by less than this fraction [-]
+OSCILLATION_MATCH = 0.05
+#: values of the effect's parameter, and of J_v, compared around the frequency match (see Diagnosis._refit)
+PHASE_STEPS, INERTIA_STEPS = 21, 11
 
 
 @dataclass
@@ -215,6 +220,11 @@ class Diagnosis:
         compared by cost), ``n_local_fits``, their final ``costs`` [-] and
         current ``fit_current_percent`` [%], and the ``kept_cost`` (the
         lowest: the fit reported).
+    oscillation_ : Oscillation or None
+        A sustained oscillation of the record's current after the ramp (a speed loop hunting: frequency,
+        RMS, share of the variance; :func:`~kilnctl.measure.oscillation.dominant_oscillation`), or None.
+        While the current model lacks it, each candidate with one parameter is also refitted from where the
+        model oscillates at its frequency (see :meth:`_refit`).
     abrupt_ : dict or None
         An abrupt change outside the catalogue that explained the record
         better than every supported candidate (``t`` [s], ``size_A`` [A],
@@ -393,6 +403,8 @@ class Diagnosis:
             scales[c] = max(float(np.sqrt(np.mean(e ** 2))), 1e-3 * float(np.std(m.channels[c][active])), 1e-12)
         train, test = holdout_masks(m, self.holdout, self.holdout_fraction, t0=exp.t0)
         self.scales_, self.train_, self.test_ = scales, train, test
+        # a limit cycle after the ramp (a speed loop hunting): candidates then match its frequency first
+        self.oscillation_ = dominant_oscillation(m.t[active], m.current[active], exp.steady_from)
         current = self._calibrate(m, params, (), scales, train, base.values_, experiment=exp)
         self.abrupt_ = None
         pool = _pool(self.workers)
@@ -663,8 +675,68 @@ class Diagnosis:
                            f"where they act differently (another ramp rate or set speed) decides.")
         return out
 
-    def _refit(self, m, params, selected, name, current_values, first_failure, scales, train, exp, before=None):
+    def _missing_oscillation(self, m, current, exp):
+        """The record's oscillation after the ramp (:func:`~kilnctl.measure.oscillation.dominant_oscillation`)
+        when the current model has none at its frequency (within :data:`OSCILLATION_MATCH`), else None."""
+        rec = getattr(self, "oscillation_", None)
+        if rec is None:
+            return None
+        active = m.t >= exp.t0 - 1e-9
+        mod = dominant_oscillation(m.t[active], current.run_.outputs["current_A"], exp.steady_from)
+        if mod is not None and abs(mod.f_hz - rec.f_hz) <= OSCILLATION_MATCH * rec.f_hz:
+            return None
+        return rec
+
+    def _match_oscillation(self, m, exp, model, comps, p, values, par, values_tried, osc):
+        """The value of the effect's parameter ``par`` at which the model oscillates at the record's frequency.
+
+        The model is run at ``values`` with ``par`` at each of ``values_tried``; where two neighbouring values
+        both make it oscillate (:func:`~kilnctl.measure.oscillation.dominant_oscillation`) on either side of
+        the record's frequency, the crossing is found by Brent's method.  Of several crossings the one whose
+        oscillation's RMS is nearest the record's.  None when there is no crossing.
+        """
+        from scipy.optimize import brentq
+
+        active = m.t >= exp.t0 - 1e-9
+        t_act = m.t[active]
+
+        def osc_at(v):
+            try:
+                run = run_model(p.replace(**dict(values, **{par: float(v)})), m, exp, model=model, effects=comps)
+            except KilnctlError:
+                return None
+            return dominant_oscillation(t_act, run.outputs["current_A"], exp.steady_from)
+
+        grid = np.unique(np.asarray(values_tried, float))
+        found = [osc_at(v) for v in grid]
+        best = None
+        for k in range(grid.size - 1):
+            a, b = found[k], found[k + 1]
+            if a is None or b is None or (a.f_hz - osc.f_hz) * (b.f_hz - osc.f_hz) > 0:
+                continue
+
+            def gap(v):
+                o = osc_at(v)
+                return (o.f_hz if o is not None else 0.0) - osc.f_hz
+
+            try:
+                v = brentq(gap, grid[k], grid[k + 1], xtol=1e-6 * grid[k + 1], rtol=1e-6)
+            except (ValueError, RuntimeError):
+                continue
+            o = osc_at(v)
+            if o is not None and (best is None or abs(o.rms - osc.rms) < best[1]):
+                best = (float(v), abs(o.rms - osc.rms))
+        return None if best is None else best[0]
+
+    def _refit(self, m, params, selected, name, current_values, first_failure, scales, train, exp, before=None,
+               oscillation=None):
         """Refit base + ``selected`` + ``name`` on the fitting part (in a worker process when workers > 1).
+
+        ``oscillation``: the record's oscillation after the ramp, when the current model lacks it.  For an
+        effect with one parameter, a second refit then starts where the model oscillates at the record's
+        frequency (:meth:`_match_oscillation`), and the refit of lower cost is kept: a limit cycle's phase
+        fits only in a valley about a millisecond of lag wide, which no grid finds, and its frequency
+        changes smoothly with the parameter.
 
         Returns
         -------
@@ -715,6 +787,27 @@ class Diagnosis:
                                   first_failure=first_failure, new_effect=name, n_local=n_local)
         except KilnctlError as exc:
             return None, f"could not be fitted: {exc}", time.perf_counter() - t_start
+        own = [fp.name for fp in eff.parameters]
+        if oscillation is not None and len(own) == 1 and not getattr(eff.parameters[0], "partner", None):
+            tried = [g[own[0]] for g in effect_starts if own[0] in g]
+            v = self._match_oscillation(m, exp, model, comps, p, init, own[0], tried, oscillation) if tried else None
+            if v is not None:
+                # the cycle's phase over the record: a valley a few hundredths of the frequency-matched value
+                # wide (a 30 ms lag: about 1 ms), and where the cycle begins, which the kiln's inertia sets (the
+                # speed's approach to its set point).  The values within 5 % of the match times J_v within 10 %
+                # of the current model's are compared by their cost (231 runs), and the best is fitted
+                phase = [{own[0]: v * (1.0 + d)} for d in np.linspace(-0.05, 0.05, PHASE_STEPS)]
+                if "J_v" in init:
+                    phase = [dict(g, J_v=init["J_v"] * f) for f in np.linspace(0.9, 1.1, INERTIA_STEPS)
+                             for g in phase]
+                try:
+                    cal2 = self._calibrate(m, params, effects, scales, train, dict(init, **{own[0]: v}), phase,
+                                           experiment=exp, first_failure=first_failure, new_effect=name,
+                                           n_local=1)
+                except KilnctlError:
+                    cal2 = None
+                if cal2 is not None and cal2.cost_ < cal.cost_:
+                    cal = cal2
         return cal, None, time.perf_counter() - t_start
 
     def _try_all(self, m, params, selected, names, current, scales, train, test, exp, pool, say, before):
@@ -722,8 +815,9 @@ class Diagnosis:
 
         ``before``: each candidate's fitted values in the round before (name -> values), or empty."""
         ff = self._first_failure(m, current, exp)
-        args = [(m, params, tuple(selected), name, dict(current.values_), ff, scales, train, exp, before.get(name))
-                for name in names]
+        osc = self._missing_oscillation(m, current, exp)
+        args = [(m, params, tuple(selected), name, dict(current.values_), ff, scales, train, exp, before.get(name),
+                 osc) for name in names]
         if pool is not None and len(names) > 1:
             # slowest first (the micro model, stick-slip), so that two workers finish together
             order = sorted(range(len(names)), key=lambda i: -_COST_RANK.get(names[i], 1))

@@ -481,6 +481,21 @@ def _fit_text(v) -> str:
     return f"{v:.1f}" if v is not None and math.isfinite(v) else "-"
 
 
+def oscillation_dict(osc) -> dict | None:
+    """A sustained oscillation of the record's current (:class:`~kilnctl.measure.oscillation.Oscillation`) as
+    ``f_hz`` [Hz], ``rms_A`` [A] and ``share`` [-], or None."""
+    if osc is None:
+        return None
+    return {"f_hz": json_number(osc.f_hz), "rms_A": json_number(osc.rms), "share": json_number(osc.share)}
+
+
+def oscillation_text(osc) -> str:
+    """What a user reads about a sustained oscillation of the record's current after the ramp."""
+    return (f"the record's current oscillates at {osc.f_hz:.2f} Hz after the ramp ({osc.rms:.0f} A RMS, "
+            f"{100 * osc.share:.0f} % of its variance): a loop hunting.  Each candidate with one parameter was "
+            "also started where the model oscillates at that frequency")
+
+
 def diagnosis_dict(d) -> dict:
     """Return a fitted diagnosis as a JSON-ready dictionary.
 
@@ -499,6 +514,7 @@ def diagnosis_dict(d) -> dict:
         "source": d.measurement_.source,
         "baseline": {k: json_number(v) for k, v in d.baseline_.items()},
         "baseline_parameters": _params_dict(d.base_calibration_),
+        "oscillation": oscillation_dict(getattr(d, "oscillation_", None)),
         "ranking": [candidate_dict(d, 0, r) for r in d.ranking_],
         "rounds": [[candidate_dict(d, i, r) for r in rnd] for i, rnd in enumerate(d.rounds_)],
         "selected": list(d.selected_),
@@ -570,6 +586,8 @@ def diagnosis_summary(d) -> str:
     """
     lines = _wrap(f"diagnosis of {d.measurement_.source} ({d.wall_s_:.0f} s)", "")
     lines += _wrap(f"baseline (calibrated {', '.join(d.calibrate)}): {format_fit(d.baseline_)}", "  ")
+    if getattr(d, "oscillation_", None) is not None:
+        lines += _wrap(oscillation_text(d.oscillation_), "  ")
     lines += _wrap("dBIC: BIC change on the fitted part (negative favours the effect; plain and with the "
                    "residual's coloured noise modelled, 'whitened'); held-out: error reduction on the part not "
                    "fitted [%]; fit\u00a0I: current fit on the fitted part [%]", "  ")
