@@ -166,3 +166,20 @@ def test_experiment_without_reference_starts_where_the_speed_rises():
     w = np.interp(t - 2.0, np.asarray(r.t), np.asarray(r.outputs["speed_rpm"]), left=0.0)
     m = Measurement.from_arrays(t, 100 + 0 * t, w)
     assert m.experiment(p).t0 == pytest.approx(2.0, abs=0.005)
+
+
+@pytest.mark.parametrize("channel,unit,value", [("current_A", "A", 0.0), ("current_A", "A", 42.0),
+                                                ("speed_rpm", "rpm", 0.0), ("speed_rpm", "rpm", 250.0)])
+def test_dead_channel_is_refused(tmp_path, channel, unit, value):
+    """A required channel with one value at every sample is refused, naming the column and the fix.
+
+    Truth: a measured start-up's current and speed both change (the speed rises from rest to the set point); a
+    flat channel has zero variance, so the fit % of MATLAB's compare, 100 (1 - |y - y_model| / |y - mean y|), is
+    not defined (it printed ``-inf %`` and diagnose explained the flat line with an effect).
+    """
+    t, i, w, r = _rows()
+    flat = np.full(t.size, value)
+    cols = (t, flat, w, r) if channel == "current_A" else (t, i, flat, r)
+    with pytest.raises(DataError, match=rf"rec.csv: column '{channel}' is {value:g} {unit} at every one of its 200 "
+                                        rf"samples: a dead channel.*--columns {channel}=NAME"):
+        read_csv(_write(tmp_path, _csv(*cols)))

@@ -409,9 +409,10 @@ def read_csv(path, params: Parameters | None = None, columns=None) -> Measuremen
         Missing or duplicated columns, a non-numeric or empty cell, a row of
         the wrong length, non-increasing time, NaN, a gap (a step above
         5 x the median), a record shorter than 2 s or 50 samples, a time
-        axis implausible for a start-up (milliseconds read as seconds), or a
-        channel whose scale suggests the wrong unit.  The message names the
-        file, the line and the column.
+        axis implausible for a start-up (milliseconds read as seconds), a
+        channel whose scale suggests the wrong unit, or a current or speed
+        with one value at every sample (a dead channel).  The message names
+        the file, the line and the column.
     """
     from .tables import read_table
 
@@ -566,8 +567,11 @@ def _interpret(table, params, columns, *, log=False) -> Measurement:
     notes.extend(_speed_column_notes(arrays, parsed, names, found, kept, columns))
     if dropped:
         notes.append(f"columns ignored: {', '.join(dropped)}")
-    return _checked(arrays, rows, src, params, tuple(notes), row_word=table.row_word, labels=labels, log=log,
-                    time_name=parsed[tj][0])
+    m = _checked(arrays, rows, src, params, tuple(notes), row_word=table.row_word, labels=labels, log=log,
+                 time_name=parsed[tj][0])
+    if not log:  # a file must hold a start-up; arrays built in code may hold any test signal
+        _check_dead(m.channels, src, labels)
+    return m
 
 
 #: a unit written at the end of a column's name, ``motor_current_A``, ``t_ms``, ``n_rad_s``
@@ -962,6 +966,21 @@ def _check_time_scale(t, dt, source, label, params, max_span, name="time_s", spe
     else:
         fix = f"give a record sampled at least every {step_limit:.3g} s"
     raise DataError(f"{source}: column {label}: {problem}; {fix}")
+
+
+def _check_dead(arrays, source, labels=None):
+    """Refuse a required channel that holds one value at every sample: a dead channel or the wrong column (its fit %
+    is not defined, and a diagnosis would explain a flat line)."""
+    for name in REQUIRED:
+        a = arrays.get(name)
+        if a is None or a.size == 0 or np.ptp(a) > 0:
+            continue
+        label = (labels or {}).get(name) or repr(name)
+        what = "armature current" if name == "current_A" else "motor speed"
+        still = "" if name == "current_A" else "; if the kiln did not move, the record holds no start-up to compare"
+        raise DataError(f"{source}: column {label} is {a[0]:.6g} {REQUIRED[name]} at every one of its {a.size} "
+                        f"samples: a dead channel (sensor off, tag not logged) or the wrong column; export the measured {what}, "
+                        f"or map it with --columns {name}=NAME{still}")
 
 
 def _check_units(arrays, lines, source, params, row_word, labels=None, log=False):

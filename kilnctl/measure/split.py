@@ -30,7 +30,7 @@ import numpy as np
 
 from ..errors import DataError
 from ..params import Parameters
-from .io import Measurement, _checked
+from .io import Measurement, _check_dead, _checked
 
 __all__ = ["Startup", "Startups", "split_startups", "REST_FRACTION", "RUN_FRACTION", "STOP_FRACTION"]
 
@@ -109,9 +109,11 @@ class Startups:
         arrays = {"time_s": self.log.t[s.i0:s.i1]}
         arrays.update({k: v[s.i0:s.i1] for k, v in self.log.channels.items()})
         src = f"{self.log.source} start-up {n} ({self._row_word}s {s.rows[0]}-{s.rows[1]})"
-        return _checked(arrays, self.log.lines[s.i0:s.i1], src, self._params,
-                        (f"start-up {n} of {self.log.source}, ramp from t = {s.ramp_start:.3f} s",),
-                        row_word=self._row_word)
+        rec = _checked(arrays, self.log.lines[s.i0:s.i1], src, self._params,
+                       (f"start-up {n} of {self.log.source}, ramp from t = {s.ramp_start:.3f} s",),
+                       row_word=self._row_word)
+        _check_dead(rec.channels, src)
+        return rec
 
     def __len__(self) -> int:
         return len(self.items)
