@@ -200,8 +200,12 @@ class Startups:
                 raise DataError(f"--out {out_dir} holds the log {p}: give another folder")
         texts = {f"startup_{n:02d}.csv": self._text(n, rec) for n, rec in enumerate(self.records(), start=1)}
         parent = out_dir.resolve().parent
-        parent.mkdir(parents=True, exist_ok=True)
-        tmp = Path(tempfile.mkdtemp(dir=parent, prefix=".tmp-split-"))
+        try:
+            parent.mkdir(parents=True, exist_ok=True)
+            tmp = Path(tempfile.mkdtemp(dir=parent, prefix=".tmp-split-"))
+        except OSError as exc:  # a file in the way, a read-only folder: nothing is written
+            raise DataError(f"--out {out_dir}: cannot make the folder ({exc.strerror or exc}); give a folder path "
+                            "you may write into") from None
         try:
             for name, text in texts.items():
                 (tmp / name).write_text(text)
@@ -217,6 +221,9 @@ class Startups:
                     for p in moved:
                         p.unlink(missing_ok=True)
                     raise
+        except OSError as exc:  # a full disk, a folder made read-only meanwhile: nothing is left behind
+            raise DataError(f"--out {out_dir}: cannot write the records ({exc.strerror or exc}); nothing was written; "
+                            "give a folder you may write into") from None
         finally:
             shutil.rmtree(tmp, ignore_errors=True)
         return [out_dir / name for name in texts]
