@@ -410,9 +410,10 @@ def read_csv(path, params: Parameters | None = None, columns=None) -> Measuremen
         the wrong length, non-increasing time, NaN, a gap (a step above
         5 x the median), a record shorter than 2 s or 50 samples, a time
         axis implausible for a start-up (milliseconds read as seconds), a
-        channel whose scale suggests the wrong unit, or a current or speed
-        with one value at every sample (a dead channel).  The message names
-        the file, the line and the column.
+        channel whose scale suggests the wrong unit, a current or speed
+        with one value at every sample (a dead channel), or a speed that
+        starts above 10 % of ``omega_ref`` (the record begins after the
+        start-up).  The message names the file, the line and the column.
     """
     from .tables import read_table
 
@@ -571,6 +572,7 @@ def _interpret(table, params, columns, *, log=False) -> Measurement:
                  time_name=parsed[tj][0])
     if not log:  # a file must hold a start-up; arrays built in code may hold any test signal
         _check_dead(m.channels, src, labels)
+        _check_starts_at_rest(m, src, labels, Parameters() if params is None else params)
     return m
 
 
@@ -979,8 +981,26 @@ def _check_dead(arrays, source, labels=None):
         what = "armature current" if name == "current_A" else "motor speed"
         still = "" if name == "current_A" else "; if the kiln did not move, the record holds no start-up to compare"
         raise DataError(f"{source}: column {label} is {a[0]:.6g} {REQUIRED[name]} at every one of its {a.size} "
-                        f"samples: a dead channel (sensor off, tag not logged) or the wrong column; export the measured {what}, "
-                        f"or map it with --columns {name}=NAME{still}")
+                        "samples: a dead channel (sensor off, tag not logged) or the wrong column; export the "
+                        f"measured {what}, or map it with --columns {name}=NAME{still}")
+
+
+#: a record whose speed starts above this fraction of omega_ref does not start at rest
+START_AT_REST_FRACTION = 0.1
+
+
+def _check_starts_at_rest(m, source, labels, params):
+    """Refuse a record that begins with the motor already running: the model starts at rest, so there is no
+    start-up in it to compare (the first samples' median, so that noise does not decide)."""
+    w0 = float(np.median(m.speed[:5]))
+    if not w0 > START_AT_REST_FRACTION * params.omega_ref > 0:
+        return
+    at = _where(source, m.lines, 0, "speed_rpm", m.row_word, labels)
+    raise DataError(f"{at}: the record starts with the motor running ({w0:.4g} rpm over its first samples, "
+                    f"{100 * w0 / params.omega_ref:.0f} % of the setup's omega_ref = {params.omega_ref:g} rpm); "
+                    "compare and diagnose start the model at rest, so a record must begin before the start-up: "
+                    "export it from before the speed reference rises, or cut the start-ups out of a longer log with "
+                    "kilnctl split-startups")
 
 
 def _check_units(arrays, lines, source, params, row_word, labels=None, log=False):
