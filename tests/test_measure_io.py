@@ -200,3 +200,23 @@ def test_record_that_starts_with_the_motor_running_is_refused(tmp_path):
                                         r"omega_ref = 500 rpm\).*kilnctl split-startups"):
         read_csv(_write(tmp_path, _csv(t[late], i[late], w[late], r[late])))
     assert read_csv(_write(tmp_path, _csv(t, i, w, r), "whole.csv")).n == 400
+
+
+def test_current_in_ma_and_speed_in_drive_units_are_refused(tmp_path):
+    """A current far above the current limit, or a speed far above the set point, is refused as a unit slip.
+
+    Truth: the drive holds the armature current at or below I_max (1500 A, Table 1 defaults) and the speed follows
+    its 500 rpm reference; the same start-up in mA (x 1000) or in a drive's internal units (16384 = 100 % of 1500 rpm,
+    x 10.9) cannot be A or rpm (compare printed fits of -164 % and -236 % with no warning).  The record in A and rpm
+    reads.
+    """
+    t, i, w, r = _rows()
+    w = w + 0.5 * np.sin(7.0 * t)
+    with pytest.raises(DataError, match=r"line 201, column 'current_A': largest value 1.199e\+05 is 80 x the setup's "
+                                        r"current limit I_max = 1500 A: looks like mA.*'current_A \[mA\]'"):
+        read_csv(_write(tmp_path, _csv(t, 1000 * i, w, r)))
+    norm = 16384 / 1500
+    with pytest.raises(DataError, match=r"column 'speed_rpm': largest value 53\d\d is 11 x the setup's speed "
+                                        r"reference 500 rpm: not a motor speed in rpm.*convert it to rpm"):
+        read_csv(_write(tmp_path, _csv(t, i, norm * w, norm * r), "norm.csv"))
+    assert read_csv(_write(tmp_path, _csv(t, i, w, r), "si.csv")).n == 200

@@ -985,6 +985,8 @@ def _check_dead(arrays, source, labels=None):
                         f"measured {what}, or map it with --columns {name}=NAME{still}")
 
 
+#: a current above this many times I_max, or a speed above this many times omega_ref, is in another unit
+TOO_LARGE = 5.0
 #: a record whose speed starts above this fraction of omega_ref does not start at rest
 START_AT_REST_FRACTION = 0.1
 
@@ -1020,6 +1022,11 @@ def _check_units(arrays, lines, source, params, row_word, labels=None, log=False
                 f"{at}: largest value {top:.4g} looks like rad/s, not rpm (the setup's speed reference {w_ref:g} rpm "
                 f"is {rad:.4g} rad/s); multiply by 60/(2*pi) = 9.549, or write the unit in the header "
                 f"('{name} [rad/s]')")
+        if not log and top > TOO_LARGE * w_ref > 0:
+            raise DataError(
+                f"{at}: largest value {top:.4g} is {top / w_ref:.0f} x the setup's speed reference {w_ref:g} rpm: not "
+                "a motor speed in rpm (a drive's internal units, 16384 = 100 %? a glitch value?); convert it to rpm, "
+                "or, if the setup's omega_ref is wrong, correct it in the setup file (--config)")
         kiln = w_ref / params.n
         if not log and 0 < top < 0.3 * rad and top < 3.0 * kiln:
             raise DataError(
@@ -1035,6 +1042,12 @@ def _check_units(arrays, lines, source, params, row_word, labels=None, log=False
     cur = arrays["current_A"]
     top = float(np.max(np.abs(cur)))
     k = int(np.argmax(np.abs(cur)))
+    if not log and top > TOO_LARGE * params.I_max > 0:
+        raise DataError(
+            f"{_where(source, lines, k, 'current_A', row_word, labels)}: largest value {top:.4g} is "
+            f"{top / params.I_max:.0f} x the setup's current limit I_max = {params.I_max:g} A: looks like mA or a "
+            "drive's internal units (16384 = 100 %?), not A; give the current in A, or write the unit in the header "
+            "('current_A [mA]'); if the setup's I_max is wrong, correct it in the setup file (--config)")
     if 0 < top < 0.01 * params.I_max:
         raise DataError(
             f"{_where(source, lines, k, 'current_A', row_word, labels)}: largest value {top:.4g} looks like kA or a "
