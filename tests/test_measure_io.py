@@ -220,3 +220,25 @@ def test_current_in_ma_and_speed_in_drive_units_are_refused(tmp_path):
                                         r"reference 500 rpm: not a motor speed in rpm.*convert it to rpm"):
         read_csv(_write(tmp_path, _csv(t, i, norm * w, norm * r), "norm.csv"))
     assert read_csv(_write(tmp_path, _csv(t, i, w, r), "si.csv")).n == 200
+
+
+def test_timestamps_of_one_second_resolution_give_the_error_and_no_numpy_warning(tmp_path):
+    """Timestamps written to the second (a historian's default) repeat within a second: one DataError, no warning.
+
+    Truth: 50 samples per second stamped to the second give 50 equal times in a row; the reader must refuse the
+    second of them by its line, and print nothing else (a numpy RuntimeWarning 'invalid value encountered in
+    subtract' reached the user before the error).
+    """
+    import datetime as dt
+    import warnings
+
+    t, i, w, r = _rows(n=200, dt=0.02)
+    w = w + 0.5 * np.sin(7.0 * t)
+    stamps = [(dt.datetime(2024, 3, 1, 6, 15) + dt.timedelta(seconds=float(x))).strftime("%Y-%m-%d %H:%M:%S")
+              for x in t]
+    text = "time_s,current_A,speed_rpm\n" + "\n".join(f"{s},{a:.3f},{b:.3f}" for s, a, b in zip(stamps, i, w))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(DataError, match=r"rec.csv: line 3, column 'time_s': time 0 s is not after.*the "
+                                            r"timestamps repeat: export them with fractions of a second"):
+            read_csv(_write(tmp_path, text + "\n"))

@@ -715,11 +715,11 @@ def _speed_column_notes(arrays, parsed, names, found, kept, columns) -> list[str
     j_speed = found["speed_rpm"][0]
     base = parsed[j_speed][0]
     t, v = arrays["time_s"], arrays["speed_rpm"]
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore"):  # repeated times are refused later, with their line
         slope = np.diff(v) / np.diff(t)
-    moving = np.abs(slope) > 1e-9
-    if v.size > 20 and moving.sum() > 10:
+        moving = np.abs(slope) > 1e-9
         change = np.abs(np.diff(slope[moving]))
+    if v.size > 20 and moving.sum() > 10:
         top = float(np.max(np.abs(v))) or 1.0
         dt = float(np.median(np.diff(t)))
         if np.isfinite(change).all() and np.median(change) * dt < 1e-6 * top:
@@ -867,8 +867,12 @@ def _checked(arrays, lines, source, params, notes, row_word, labels=None, log=Fa
     dts = np.diff(t)
     if (dts <= 0).any():
         k = int(np.argmax(dts <= 0)) + 1
+        stamped = any(str(n).startswith("time from timestamps") for n in notes)
+        hint = ("; the timestamps repeat: export them with fractions of a second (2024-03-01T06:15:00.020)"
+                if stamped and dts[k - 1] == 0 else "")
         raise DataError(f"{where(k, 'time_s')}: time {t[k]:.9g} s is not after "
-                        f"the previous sample's {t[k - 1]:.9g} s ({row_word} {int(lines[k - 1])}); time must increase")
+                        f"the previous sample's {t[k - 1]:.9g} s ({row_word} {int(lines[k - 1])}); time must increase"
+                        f"{hint}")
     med = float(np.median(dts))
     if not log and (dts > GAP_FACTOR * med).any():
         k = int(np.argmax(dts > GAP_FACTOR * med)) + 1
