@@ -242,3 +242,17 @@ def test_timestamps_of_one_second_resolution_give_the_error_and_no_numpy_warning
         with pytest.raises(DataError, match=r"rec.csv: line 3, column 'time_s': time 0 s is not after.*the "
                                             r"timestamps repeat: export them with fractions of a second"):
             read_csv(_write(tmp_path, text + "\n"))
+
+
+def test_an_infinite_cell_is_named_as_written(tmp_path):
+    """A cell 'inf' (or '-inf') is refused with the value as the user wrote it, not numpy's repr of it.
+
+    Truth: the cell the test writes, '-inf'; the message showed 'np.float64(-inf)' (numpy 2's repr).
+    """
+    t, i, w, r = _rows()
+    lines = _csv(t, i, w, r).splitlines()
+    cells = lines[10].split(",")
+    cells[1] = "-inf"
+    lines[10] = ",".join(cells)
+    with pytest.raises(DataError, match=r"rec.csv: line 11, column 'current_A': -inf \(not finite\)"):
+        read_csv(_write(tmp_path, "\n".join(lines) + "\n"))

@@ -856,7 +856,7 @@ def _checked(arrays, lines, source, params, notes, row_word, labels=None, log=Fa
         bad = ~np.isfinite(a)
         if bad.any():
             k = int(np.argmax(bad))
-            what = "NaN (missing value)" if np.isnan(a[k]) else f"{a[k]!r} (not finite)"
+            what = "NaN (missing value)" if np.isnan(a[k]) else f"{float(a[k])!r} (not finite)"
             raise DataError(f"{where(k, name)}: {what}; kilnctl does not fill gaps: "
                             f"cut the record or fill the value yourself ({int(bad.sum())} such cells in this column)")
     t = arrays.pop("time_s")
