@@ -355,3 +355,20 @@ def test_a_log_with_a_dead_current_tag_writes_no_record(tmp_path, capsys):
     assert all("column 'current_A' is 0 A at every one of its" in s and "dead channel" in s for s in found.skipped)
     assert main(["split-startups", str(p), "--out", str(tmp_path / "o")]) == 2
     assert "dead channel" in capsys.readouterr().err and not (tmp_path / "o").exists()
+
+
+def test_a_units_row_keeps_the_header_line_number(tmp_path):
+    """Under a units row, messages name the header's own line and the units' line.
+
+    Truth: the file the test writes has its header on line 1 and the units on line 2 (it said 'line 2 (header)
+    and 2 (units)', and 'the header (line 2)' for a short row).
+    """
+    rec = _record()
+    rows = [f"{_r(a)};{_r(b)};{_r(c)}" for a, b, c in zip(rec["t"], rec["I"], rec["n"])]
+    p = tmp_path / "r.csv"
+    p.write_text("Zeit;I_arm;n_mot\ns;A;1/min\n" + "\n".join(rows) + "\n")
+    with pytest.raises(DataError, match=r"r.csv: line 1 \(header\) and 2 \(units\): missing column 'time_s'"):
+        read_record(p)
+    p.write_text("time_s;current_A;speed_rpm\ns;A;1/min\n" + "\n".join(rows[:5] + ["1;2"] + rows[5:]) + "\n")
+    with pytest.raises(DataError, match=r"r.csv: line 8: 2 cells, but the header \(line 1\) has 3 columns"):
+        read_record(p)

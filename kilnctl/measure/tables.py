@@ -309,8 +309,8 @@ def _read_text(path: Path) -> RawTable:
                 and len(row) == len(header[1]):
             # a units row under the header (``s;A;rpm``): the units join the names, as ``Time [s]``
             units_line = lineno
-            header = (lineno, [f"{nm} [{_unit_cell(u)}]" if u and split_unit(nm)[1] is None else nm
-                               for nm, u in zip(header[1], row)])
+            header = (header[0], [f"{nm} [{_unit_cell(u)}]" if u and split_unit(nm)[1] is None else nm
+                                  for nm, u in zip(header[1], row)])
             notes.append(f"units read from line {lineno} (under the header)")
             continue
         if len(row) != len(header[1]):
