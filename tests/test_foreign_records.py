@@ -187,7 +187,8 @@ def test_diagnose_says_how_the_record_was_read_before_the_search(tmp_path, monke
     assert "record: 'n_ref [rpm]' looks like the speed reference" in seen["stderr"]
 
 
-@pytest.mark.parametrize("layout", ["units_row", "decimal_comma_cp1252", "trailing_separator"])
+@pytest.mark.parametrize("layout", ["units_row", "decimal_comma_cp1252", "trailing_separator", "excel_sep_line",
+                                    "excel_sep_line_tab"])
 def test_european_and_spreadsheet_csv_exports(tmp_path, layout):
     # truth: the values the test wrote; each layout is a common export of a historian or of Excel
     t, i, w, _ = _start_up(n=300)
@@ -204,6 +205,11 @@ def test_european_and_spreadsheet_csv_exports(tmp_path, layout):
         p.write_bytes(text.encode("cp1252"))
         m = read_record(p, columns="time_s=Zeit,current_A=Strom Läufer,speed_rpm=Drehzahl")
         assert any("Windows-1252" in n for n in m.notes) and any("decimal commas" in n for n in m.notes)
+    elif layout.startswith("excel_sep_line"):  # Excel's 'sep=;' first line names the separator (it was the header)
+        sep = "\t" if layout.endswith("tab") else ";"
+        p.write_text(f"sep={sep}\ntime_s{sep}current_A{sep}speed_rpm\n" + "\n".join(
+            sep.join(x.replace(".", ",") for x in r) for r in rows) + "\n")
+        m = read_record(p)
     else:  # a separator at the end of every line: an empty last column
         p.write_text("time_s,current_A,speed_rpm,\n" + "\n".join(",".join(r) + "," for r in rows) + "\n")
         m = read_record(p)

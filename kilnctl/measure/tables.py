@@ -263,6 +263,8 @@ def read_table(path, kind: str | None = None) -> RawTable:
     return {"csv": _read_text, "excel": _read_excel, "parquet": _read_parquet, "matlab": _read_mat}[kind](path)
 
 
+#: the first line Excel writes (and reads) to name a CSV file's separator: ``sep=;``
+_SEP_LINE = re.compile(r'^"?sep=(.)"?$', re.IGNORECASE)
 _DECIMAL_COMMA = re.compile(r"^[+-]?\d+,\d*(?:[eE][+-]?\d+)?$")
 
 
@@ -289,14 +291,19 @@ def _read_text(path: Path) -> RawTable:
     header = None
     cells: list[list[str]] = []
     lines: list[int] = []
-    delim = ","
+    delim, forced = ",", None
     units_line = None
     for lineno, line in enumerate(text.splitlines(), start=1):
         s = line.strip()
         if not s or s.startswith("#"):
             continue
+        sep = _SEP_LINE.match(line.strip(" \r\n")) if header is None else None
+        if sep:  # Excel's separator line ('sep=;') before the header
+            delim = forced = sep.group(1)
+            continue
         if header is None:
-            delim = ";" if (";" in s and "," not in s) else ("\t" if ("\t" in s and "," not in s) else ",")
+            if not forced:
+                delim = ";" if (";" in s and "," not in s) else ("\t" if ("\t" in s and "," not in s) else ",")
             names = [h.strip() for h in next(csv.reader([s], delimiter=delim))]
             while len(names) > 1 and not names[-1]:  # a trailing separator: an empty last column
                 names.pop()
