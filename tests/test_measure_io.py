@@ -256,3 +256,17 @@ def test_an_infinite_cell_is_named_as_written(tmp_path):
     lines[10] = ",".join(cells)
     with pytest.raises(DataError, match=r"rec.csv: line 11, column 'current_A': -inf \(not finite\)"):
         read_csv(_write(tmp_path, "\n".join(lines) + "\n"))
+
+
+def test_an_unnamed_column_says_how_to_fix_it(tmp_path):
+    """A header with an unnamed first column (pandas' ``to_csv`` without ``index=False``) names the fix.
+
+    Truth: the header the test writes, ',time_s,current_A,...': column 1 has no name (the message said only
+    'empty column name in the header').
+    """
+    t, i, w, r = _rows()
+    lines = _csv(t, i, w, r).splitlines()
+    text = "\n".join(["," + lines[0]] + [f"{k},{row}" for k, row in enumerate(lines[1:])]) + "\n"
+    with pytest.raises(DataError, match=r"rec.csv: line 1 \(header\), column 1: empty column name in the header; "
+                                        r"name the column, or delete it .*index=False"):
+        read_csv(_write(tmp_path, text))

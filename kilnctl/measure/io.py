@@ -476,7 +476,8 @@ def _interpret(table, params, columns, *, log=False) -> Measurement:
     seen = set()
     for j, nm in enumerate(names):
         if not nm:
-            raise DataError(f"{head}, column {j + 1}: empty column name in the header")
+            raise DataError(f"{head}, column {j + 1}: empty column name in the header; name the column, or delete it "
+                            "(a row number written by pandas' to_csv? write the file with index=False)")
         if nm in seen:
             raise DataError(f"{head}: column {nm!r} appears twice in the header")
         seen.add(nm)
