@@ -270,3 +270,18 @@ def test_an_unnamed_column_says_how_to_fix_it(tmp_path):
     with pytest.raises(DataError, match=r"rec.csv: line 1 \(header\), column 1: empty column name in the header; "
                                         r"name the column, or delete it .*index=False"):
         read_csv(_write(tmp_path, text))
+
+
+def test_speed_in_per_cent_is_not_only_called_rad_per_s(tmp_path):
+    """A speed in per cent of a 1500 rpm rated speed (peak 33 %) is not sold as rad/s alone.
+
+    Truth: 500 rpm is 52.36 rad/s (x 2 pi / 60); the test's peak, 0.98 x 500 / 1500 x 100 = 32.7, is 62 % of that,
+    so multiplying by 9.549 (the only fix the message gave) would read a 312 rpm start-up; a speed truly in rad/s
+    (51.3) keeps the plain rad/s message.
+    """
+    t, i, w, r = _rows()
+    with pytest.raises(DataError, match=r"largest value 32.67 looks like rad/s.*it is 62 % of that, so it may "
+                                        r"instead be per cent of a rated speed"):
+        read_csv(_write(tmp_path, _csv(t, i, w / 15.0, r / 15.0)))
+    with pytest.raises(DataError, match=r"largest value 51.31 looks like rad/s.*\('speed_rpm \[rad/s\]'\)$"):
+        read_csv(_write(tmp_path, _csv(t, i, w / 9.5493, r / 9.5493), "rad.csv"))

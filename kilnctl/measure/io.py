@@ -1023,10 +1023,13 @@ def _check_units(arrays, lines, source, params, row_word, labels=None, log=False
         k = int(np.argmax(np.abs(a)))
         rad = w_ref / RPM_PER_RAD_S
         if 0.3 * rad < top < 0.12 * w_ref and top < 2.0 * rad:
+            pct = "" if abs(top / rad - 1.0) < 0.15 else (
+                f"; it is {100 * top / rad:.0f} % of that, so it may instead be per cent of a rated speed: then "
+                "convert it to rpm yourself")
             raise DataError(
                 f"{at}: largest value {top:.4g} looks like rad/s, not rpm (the setup's speed reference {w_ref:g} rpm "
                 f"is {rad:.4g} rad/s); multiply by 60/(2*pi) = 9.549, or write the unit in the header "
-                f"('{name} [rad/s]')")
+                f"('{name} [rad/s]'){pct}")
         if not log and top > TOO_LARGE * w_ref > 0:
             raise DataError(
                 f"{at}: largest value {top:.4g} is {top / w_ref:.0f} x the setup's speed reference {w_ref:g} rpm: not "
