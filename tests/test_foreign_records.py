@@ -256,3 +256,20 @@ def test_a_setup_that_states_the_torque_law_is_fitted_as_stick_slip(tmp_path):
     true_fit = compare(m, setup.params.replace(**truth["base"])).fit["current_A"]
     d = Diagnosis(setup.params, candidates=(), workers=1).fit(m)
     assert d.baseline_["current_A"] > true_fit - 1.0
+
+
+def test_a_file_mixing_decimal_commas_and_points_names_the_clash(tmp_path):
+    """A ';' file with decimal commas and one column written with decimal points: the message names both.
+
+    Truth: the test writes the time and current with decimal commas and the speed with points (one column
+    formatted apart, as a spreadsheet does); the error was "line 2, column 'time_s': '0,000' is neither a number of
+    seconds nor an ISO 8601 timestamp", which hid the cause (the points turn off the reading of decimal commas).
+    """
+    t, i, w, _ = _start_up(n=300)
+    p = tmp_path / "rec.csv"
+    p.write_text("time_s;current_A;speed_rpm\n" + "\n".join(
+        f"{a:.3f};{b:.2f};{c:.3f}".replace(".", ",", 2) for a, b, c in zip(t, i, w)) + "\n")
+    with pytest.raises(DataError, match=r"rec.csv: line 2, column 'time_s': '0,000' is not a number; decimal commas "
+                                        r"are not read, because line 2, column 'speed_rpm' has a decimal point "
+                                        r"\('-?0.\d+'\): give every number of the file with one decimal sign"):
+        read_record(p)

@@ -776,7 +776,9 @@ def _numbers(table, j, label, required):
         try:
             float(c)
         except (TypeError, ValueError):
-            hint = " (decimal comma? write 1.5, not 1,5)" if isinstance(c, str) and "," in c else ""
+            hint = ""
+            if isinstance(c, str) and "," in c:
+                hint = f"; {table.decimal_clash}" if table.decimal_clash else " (decimal comma? write 1.5, not 1,5)"
             raise DataError(f"{table.where(k)}, column {label}: {c!r} is not a number{hint}") from None
     raise DataError(f"{table.source}: column {label}: not numeric")  # pragma: no cover - every cell converted
 
@@ -829,6 +831,8 @@ def _parse_stamps(table, col, label):
                 d = _dt.datetime.fromisoformat(c.strip())
             except ValueError:
                 d = None
+        if not isinstance(d, _dt.datetime) and isinstance(c, str) and "," in c and table.decimal_clash:
+            raise DataError(f"{table.where(k)}, column {label}: {c!r} is not a number; {table.decimal_clash}")
         if not isinstance(d, _dt.datetime):
             raise DataError(f"{table.where(k)}, column {label}: {c!r} is neither a number of seconds nor an ISO "
                             "8601 timestamp (e.g. 2024-03-01T06:15:00.020); give the time in one form for every row")

@@ -205,6 +205,9 @@ class RawTable:
         the names are not on a line or row: Parquet, MATLAB).
     notes : list of str
         Remarks made while reading.
+    decimal_clash : str
+        Why decimal commas were not read (a cell with a decimal point elsewhere), for the message of a cell
+        that is then not a number; empty otherwise.
     """
 
     names: list
@@ -214,6 +217,7 @@ class RawTable:
     source: str
     header: str
     notes: list = field(default_factory=list)
+    decimal_clash: str = ""
 
     def where(self, k: int, column: str | None = None) -> str:
         """Return ``file: line N, column 'X'`` for sample ``k``.
@@ -331,16 +335,25 @@ def _read_text(path: Path) -> RawTable:
     if not cells:
         raise DataError(f"{path}: no data rows after the header (line {hline})")
     arr = np.array(cells, dtype=object)
+    clash = ""
     if delim != ",":
         # decimal commas (``1,5``) in a file separated by ';' or tabs, where a comma can mean nothing else;
         # only when no cell of the file has a decimal point, so a file never mixes both readings
         flat = [c for r in cells for c in r]
-        if any(_DECIMAL_COMMA.match(c) for c in flat) and not any("." in c and _is_number(c) for c in flat):
-            arr = np.array([[c.replace(",", ".") if _DECIMAL_COMMA.match(c) else c for c in r] for r in cells],
-                           dtype=object)
-            notes.append("decimal commas read as decimal points (a ';'- or tab-separated file)")
+        if any(_DECIMAL_COMMA.match(c) for c in flat):
+            point = next(((k, j) for k, r in enumerate(cells) for j, c in enumerate(r) if "." in c and _is_number(c)),
+                         None)
+            if point is None:
+                arr = np.array([[c.replace(",", ".") if _DECIMAL_COMMA.match(c) else c for c in r] for r in cells],
+                               dtype=object)
+                notes.append("decimal commas read as decimal points (a ';'- or tab-separated file)")
+            else:
+                k, j = point
+                clash = (f"decimal commas are not read, because line {lines[k]}, column {names[j]!r} has a decimal "
+                         f"point ({cells[k][j]!r}): give every number of the file with one decimal sign")
     head = f"line {hline} (header)" + (f" and {units_line} (units)" if units_line else "")
-    return RawTable(names, [arr[:, j] for j in range(len(names))], np.array(lines), "line", str(path), head, notes)
+    return RawTable(names, [arr[:, j] for j in range(len(names))], np.array(lines), "line", str(path), head, notes,
+                    clash)
 
 
 def _is_number(c: str) -> bool:
