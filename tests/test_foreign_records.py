@@ -6,6 +6,7 @@ reads or tells the user against them.
 """
 
 import math
+import re
 import subprocess
 import sys
 
@@ -272,4 +273,21 @@ def test_a_file_mixing_decimal_commas_and_points_names_the_clash(tmp_path):
     with pytest.raises(DataError, match=r"rec.csv: line 2, column 'time_s': '0,000' is not a number; decimal commas "
                                         r"are not read, because line 2, column 'speed_rpm' has a decimal point "
                                         r"\('-?0.\d+'\): give every number of the file with one decimal sign"):
+        read_record(p)
+
+
+def test_a_thousands_separator_is_named_as_such(tmp_path):
+    """A current written with a thousands separator ('1.000,08', German spreadsheet format) names that cause.
+
+    Truth: the test writes currents above 1000 A in the format '#.##0,00'; the message suggested only 'decimal
+    comma? write 1.5, not 1,5', though the file's decimal commas are fine.
+    """
+    t, i, w, _ = _start_up(n=300)
+    de = [f"{1.5 * b:,.2f}".replace(",", " ").replace(".", ",").replace(" ", ".") for b in i]
+    p = tmp_path / "rec.csv"
+    p.write_text("time_s;current_A;speed_rpm\n" + "\n".join(
+        ";".join([f"{a:.3f}".replace(".", ","), b, f"{c:.3f}".replace(".", ",")]) for a, b, c in zip(t, de, w)) + "\n")
+    first = next(k for k, c in enumerate(de) if "." in c)
+    with pytest.raises(DataError, match=rf"line {first + 2}, column 'current_A': '{re.escape(de[first])}' is not a "
+                                        r"number \(a thousands separator\? export the numbers without one"):
         read_record(p)

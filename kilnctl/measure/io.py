@@ -751,6 +751,11 @@ def _unit_quantity(unit: str):
     return next((q for q, tab in UNITS.items() if unit.strip().lower() in tab), None)
 
 
+#: a number written with a thousands separator: ``1.234,5``, ``1,234.5``, ``1.234.567`` (not ``1,234``: a decimal
+#: comma as well)
+_THOUSANDS = re.compile(r"^[+-]?\d{1,3}(?P<sep>[.,])\d{3}(?:(?:(?P=sep)\d{3})+|(?:(?P=sep)\d{3})*(?!(?P=sep))[.,]\d*)$")
+
+
 def _cell_missing(c) -> bool:
     return c is None or (isinstance(c, float) and math.isnan(c)) or (isinstance(c, str) and not c)
 
@@ -777,7 +782,9 @@ def _numbers(table, j, label, required):
             float(c)
         except (TypeError, ValueError):
             hint = ""
-            if isinstance(c, str) and "," in c:
+            if isinstance(c, str) and _THOUSANDS.match(c.strip()):
+                hint = " (a thousands separator? export the numbers without one: 1234.5, not 1.234,5 or 1,234.5)"
+            elif isinstance(c, str) and "," in c:
                 hint = f"; {table.decimal_clash}" if table.decimal_clash else " (decimal comma? write 1.5, not 1,5)"
             raise DataError(f"{table.where(k)}, column {label}: {c!r} is not a number{hint}") from None
     raise DataError(f"{table.source}: column {label}: not numeric")  # pragma: no cover - every cell converted
