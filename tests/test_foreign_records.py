@@ -6,6 +6,7 @@ reads or tells the user against them.
 """
 
 import math
+import re
 import subprocess
 import sys
 
@@ -187,7 +188,8 @@ def test_diagnose_says_how_the_record_was_read_before_the_search(tmp_path, monke
     assert "record: 'n_ref [rpm]' looks like the speed reference" in seen["stderr"]
 
 
-@pytest.mark.parametrize("layout", ["units_row", "decimal_comma_cp1252", "trailing_separator"])
+@pytest.mark.parametrize("layout", ["units_row", "decimal_comma_cp1252", "trailing_separator", "excel_sep_line",
+                                    "excel_sep_line_tab"])
 def test_european_and_spreadsheet_csv_exports(tmp_path, layout):
     # truth: the values the test wrote; each layout is a common export of a historian or of Excel
     t, i, w, _ = _start_up(n=300)
@@ -204,6 +206,11 @@ def test_european_and_spreadsheet_csv_exports(tmp_path, layout):
         p.write_bytes(text.encode("cp1252"))
         m = read_record(p, columns="time_s=Zeit,current_A=Strom Läufer,speed_rpm=Drehzahl")
         assert any("Windows-1252" in n for n in m.notes) and any("decimal commas" in n for n in m.notes)
+    elif layout.startswith("excel_sep_line"):  # Excel's 'sep=;' first line names the separator (it was the header)
+        sep = "\t" if layout.endswith("tab") else ";"
+        p.write_text(f"sep={sep}\ntime_s{sep}current_A{sep}speed_rpm\n" + "\n".join(
+            sep.join(x.replace(".", ",") for x in r) for r in rows) + "\n")
+        m = read_record(p)
     else:  # a separator at the end of every line: an empty last column
         p.write_text("time_s,current_A,speed_rpm,\n" + "\n".join(",".join(r) + "," for r in rows) + "\n")
         m = read_record(p)
@@ -250,3 +257,37 @@ def test_a_setup_that_states_the_torque_law_is_fitted_as_stick_slip(tmp_path):
     true_fit = compare(m, setup.params.replace(**truth["base"])).fit["current_A"]
     d = Diagnosis(setup.params, candidates=(), workers=1).fit(m)
     assert d.baseline_["current_A"] > true_fit - 1.0
+
+
+def test_a_file_mixing_decimal_commas_and_points_names_the_clash(tmp_path):
+    """A ';' file with decimal commas and one column written with decimal points: the message names both.
+
+    Truth: the test writes the time and current with decimal commas and the speed with points (one column
+    formatted apart, as a spreadsheet does); the error was "line 2, column 'time_s': '0,000' is neither a number of
+    seconds nor an ISO 8601 timestamp", which hid the cause (the points turn off the reading of decimal commas).
+    """
+    t, i, w, _ = _start_up(n=300)
+    p = tmp_path / "rec.csv"
+    p.write_text("time_s;current_A;speed_rpm\n" + "\n".join(
+        f"{a:.3f};{b:.2f};{c:.3f}".replace(".", ",", 2) for a, b, c in zip(t, i, w)) + "\n")
+    with pytest.raises(DataError, match=r"rec.csv: line 2, column 'time_s': '0,000' is not a number; decimal commas "
+                                        r"are not read, because line 2, column 'speed_rpm' has a decimal point "
+                                        r"\('-?0.\d+'\): give every number of the file with one decimal sign"):
+        read_record(p)
+
+
+def test_a_thousands_separator_is_named_as_such(tmp_path):
+    """A current written with a thousands separator ('1.000,08', German spreadsheet format) names that cause.
+
+    Truth: the test writes currents above 1000 A in the format '#.##0,00'; the message suggested only 'decimal
+    comma? write 1.5, not 1,5', though the file's decimal commas are fine.
+    """
+    t, i, w, _ = _start_up(n=300)
+    de = [f"{1.5 * b:,.2f}".replace(",", " ").replace(".", ",").replace(" ", ".") for b in i]
+    p = tmp_path / "rec.csv"
+    p.write_text("time_s;current_A;speed_rpm\n" + "\n".join(
+        ";".join([f"{a:.3f}".replace(".", ","), b, f"{c:.3f}".replace(".", ",")]) for a, b, c in zip(t, de, w)) + "\n")
+    first = next(k for k, c in enumerate(de) if "." in c)
+    with pytest.raises(DataError, match=rf"line {first + 2}, column 'current_A': '{re.escape(de[first])}' is not a "
+                                        r"number \(a thousands separator\? export the numbers without one"):
+        read_record(p)

@@ -242,3 +242,41 @@ def test_strategies_schedule_horizons_and_widths():
     # the best of the rest is then the next point, 0.5
     u2 = [np.array([0.0]), np.array([0.0]), np.array([0.5]), np.array([3.0])]
     assert [float(x[0]) for x in Starts(None, 3, 1.0).choose(u2, [9.0, 1.0, 2.0, 3.0])] == [0.0, 0.5, 3.0]
+
+
+def test_report_folder_below_a_file_is_refused_before_the_work(tmp_path, capsys, monkeypatch):
+    """``--report`` (compare, diagnose) and ``--out`` (split-startups) below a file: a clear error, before any work.
+
+    Truth: the file system; no folder can be made below a file (the run ended in a NotADirectoryError traceback
+    after the work).  Reading the record is replaced by a function that fails the test: the refusal comes before it.
+    """
+    from kilnctl.cli import main
+    from kilnctl.measure import example_paths
+
+    data = tmp_path / "rec.csv"
+    data.write_bytes(example_paths()[0].read_bytes())
+    monkeypatch.setattr("kilnctl.measure.io.read_record", lambda *a, **k: pytest.fail("the record was read"))
+    for argv in (["compare", "--data", str(data), "--report", str(data / "rep")],
+                 ["diagnose", "--data", str(data), "--report", str(data / "rep" / "deeper")],
+                 ["split-startups", str(data), "--out", str(data / "records")]):
+        assert main(argv) == 2
+        err = capsys.readouterr().err
+        assert f"{data} is a file, so no folder can be made below it" in err and "Traceback" not in err
+
+
+def test_a_report_file_that_cannot_be_written_is_a_clear_error(tmp_path, monkeypatch):
+    """A write that fails (full disk, read-only folder) ends in a ConfigFileError naming the folder and file.
+
+    Truth: the OSError the test makes the writer raise (ENOSPC); before, it reached the user as a traceback.
+    """
+    import errno
+
+    from kilnctl.errors import ConfigFileError
+    from kilnctl.measure import report
+
+    def full(path, data):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(report, "write_atomic", full)
+    with pytest.raises(ConfigFileError, match=r"--report .*rep: cannot write a.json \(No space left on device\)"):
+        report.write_report_files(tmp_path / "rep", {"a.json": {"x": 1}})

@@ -166,3 +166,122 @@ def test_experiment_without_reference_starts_where_the_speed_rises():
     w = np.interp(t - 2.0, np.asarray(r.t), np.asarray(r.outputs["speed_rpm"]), left=0.0)
     m = Measurement.from_arrays(t, 100 + 0 * t, w)
     assert m.experiment(p).t0 == pytest.approx(2.0, abs=0.005)
+
+
+@pytest.mark.parametrize("channel,unit,value", [("current_A", "A", 0.0), ("current_A", "A", 42.0),
+                                                ("speed_rpm", "rpm", 0.0), ("speed_rpm", "rpm", 250.0)])
+def test_dead_channel_is_refused(tmp_path, channel, unit, value):
+    """A required channel with one value at every sample is refused, naming the column and the fix.
+
+    Truth: a measured start-up's current and speed both change (the speed rises from rest to the set point); a
+    flat channel has zero variance, so the fit % of MATLAB's compare, 100 (1 - |y - y_model| / |y - mean y|), is
+    not defined (it printed ``-inf %`` and diagnose explained the flat line with an effect).
+    """
+    t, i, w, r = _rows()
+    flat = np.full(t.size, value)
+    cols = (t, flat, w, r) if channel == "current_A" else (t, i, flat, r)
+    with pytest.raises(DataError, match=rf"rec.csv: column '{channel}' is {value:g} {unit} at every one of its 200 "
+                                        rf"samples: a dead channel.*--columns {channel}=NAME"):
+        read_csv(_write(tmp_path, _csv(*cols)))
+
+
+def test_record_that_starts_with_the_motor_running_is_refused(tmp_path):
+    """A record cut after the start-up (the motor already at speed) is refused; one starting at rest is read.
+
+    Truth: the model of compare and diagnose starts at rest (docs/measurements.md, "How the experiment is
+    reproduced"), so a record beginning at 500 rpm holds no start-up to compare; it printed current and speed fits
+    of -3586 % and -7812 % with no warning.  The same rows from before the ramp read fine.
+    """
+    t, i, w, r = _rows(n=400)
+    w = w + 0.5 * np.sin(7.0 * t)  # a measured speed is never flat
+    late = slice(200, None)  # from 10 s: the ramp ended at 6.8 s, the motor runs at 490 rpm
+    with pytest.raises(DataError, match=r"rec.csv: line 2, column 'speed_rpm': the record starts with the motor "
+                                        r"running \(49\d\.\d+ rpm over its first samples, 98 % of the setup's "
+                                        r"omega_ref = 500 rpm\).*kilnctl split-startups"):
+        read_csv(_write(tmp_path, _csv(t[late], i[late], w[late], r[late])))
+    assert read_csv(_write(tmp_path, _csv(t, i, w, r), "whole.csv")).n == 400
+
+
+def test_current_in_ma_and_speed_in_drive_units_are_refused(tmp_path):
+    """A current far above the current limit, or a speed far above the set point, is refused as a unit slip.
+
+    Truth: the drive holds the armature current at or below I_max (1500 A, Table 1 defaults) and the speed follows
+    its 500 rpm reference; the same start-up in mA (x 1000) or in a drive's internal units (16384 = 100 % of 1500 rpm,
+    x 10.9) cannot be A or rpm (compare printed fits of -164 % and -236 % with no warning).  The record in A and rpm
+    reads.
+    """
+    t, i, w, r = _rows()
+    w = w + 0.5 * np.sin(7.0 * t)
+    with pytest.raises(DataError, match=r"line 201, column 'current_A': largest value 1.199e\+05 is 80 x the setup's "
+                                        r"current limit I_max = 1500 A: looks like mA.*'current_A \[mA\]'"):
+        read_csv(_write(tmp_path, _csv(t, 1000 * i, w, r)))
+    norm = 16384 / 1500
+    with pytest.raises(DataError, match=r"column 'speed_rpm': largest value 53\d\d is 11 x the setup's speed "
+                                        r"reference 500 rpm: not a motor speed in rpm.*convert it to rpm"):
+        read_csv(_write(tmp_path, _csv(t, i, norm * w, norm * r), "norm.csv"))
+    assert read_csv(_write(tmp_path, _csv(t, i, w, r), "si.csv")).n == 200
+
+
+def test_timestamps_of_one_second_resolution_give_the_error_and_no_numpy_warning(tmp_path):
+    """Timestamps written to the second (a historian's default) repeat within a second: one DataError, no warning.
+
+    Truth: 50 samples per second stamped to the second give 50 equal times in a row; the reader must refuse the
+    second of them by its line, and print nothing else (a numpy RuntimeWarning 'invalid value encountered in
+    subtract' reached the user before the error).
+    """
+    import datetime as dt
+    import warnings
+
+    t, i, w, r = _rows(n=200, dt=0.02)
+    w = w + 0.5 * np.sin(7.0 * t)
+    stamps = [(dt.datetime(2024, 3, 1, 6, 15) + dt.timedelta(seconds=float(x))).strftime("%Y-%m-%d %H:%M:%S")
+              for x in t]
+    text = "time_s,current_A,speed_rpm\n" + "\n".join(f"{s},{a:.3f},{b:.3f}" for s, a, b in zip(stamps, i, w))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(DataError, match=r"rec.csv: line 3, column 'time_s': time 0 s is not after.*the "
+                                            r"timestamps repeat: export them with fractions of a second"):
+            read_csv(_write(tmp_path, text + "\n"))
+
+
+def test_an_infinite_cell_is_named_as_written(tmp_path):
+    """A cell 'inf' (or '-inf') is refused with the value as the user wrote it, not numpy's repr of it.
+
+    Truth: the cell the test writes, '-inf'; the message showed 'np.float64(-inf)' (numpy 2's repr).
+    """
+    t, i, w, r = _rows()
+    lines = _csv(t, i, w, r).splitlines()
+    cells = lines[10].split(",")
+    cells[1] = "-inf"
+    lines[10] = ",".join(cells)
+    with pytest.raises(DataError, match=r"rec.csv: line 11, column 'current_A': -inf \(not finite\)"):
+        read_csv(_write(tmp_path, "\n".join(lines) + "\n"))
+
+
+def test_an_unnamed_column_says_how_to_fix_it(tmp_path):
+    """A header with an unnamed first column (pandas' ``to_csv`` without ``index=False``) names the fix.
+
+    Truth: the header the test writes, ',time_s,current_A,...': column 1 has no name (the message said only
+    'empty column name in the header').
+    """
+    t, i, w, r = _rows()
+    lines = _csv(t, i, w, r).splitlines()
+    text = "\n".join(["," + lines[0]] + [f"{k},{row}" for k, row in enumerate(lines[1:])]) + "\n"
+    with pytest.raises(DataError, match=r"rec.csv: line 1 \(header\), column 1: empty column name in the header; "
+                                        r"name the column, or delete it .*index=False"):
+        read_csv(_write(tmp_path, text))
+
+
+def test_speed_in_per_cent_is_not_only_called_rad_per_s(tmp_path):
+    """A speed in per cent of a 1500 rpm rated speed (peak 33 %) is not sold as rad/s alone.
+
+    Truth: 500 rpm is 52.36 rad/s (x 2 pi / 60); the test's peak, 0.98 x 500 / 1500 x 100 = 32.7, is 62 % of that,
+    so multiplying by 9.549 (the only fix the message gave) would read a 312 rpm start-up; a speed truly in rad/s
+    (51.3) keeps the plain rad/s message.
+    """
+    t, i, w, r = _rows()
+    with pytest.raises(DataError, match=r"largest value 32.67 looks like rad/s.*it is 62 % of that, so it may "
+                                        r"instead be per cent of a rated speed"):
+        read_csv(_write(tmp_path, _csv(t, i, w / 15.0, r / 15.0)))
+    with pytest.raises(DataError, match=r"largest value 51.31 looks like rad/s.*\('speed_rpm \[rad/s\]'\)$"):
+        read_csv(_write(tmp_path, _csv(t, i, w / 9.5493, r / 9.5493), "rad.csv"))

@@ -338,3 +338,37 @@ def test_a_log_at_standstill_reads_and_says_why_nothing_was_found(tmp_path, caps
     assert main(["split-startups", str(p), "--out", str(tmp_path / "o")]) == 2
     assert "no start-up found, nothing written; a start-up rises from rest" in capsys.readouterr().err
     assert not (tmp_path / "o").exists()
+
+
+def test_a_log_with_a_dead_current_tag_writes_no_record(tmp_path, capsys):
+    """A log whose current tag was not logged (0 at every sample) yields no record, and says why.
+
+    Truth: the test writes the current as 0 A at every sample; a start-up draws current (breakaway, acceleration),
+    so a cut record would have a flat current and no defined fit % (it was written, and compare printed -inf %).
+    """
+    log = _concat([_record(n=1500, seed=1), _record(n=1500, seed=2)])
+    log["I"] = np.zeros_like(log["I"])
+    p = tmp_path / "log.csv"
+    _write_log(p, log)
+    found = split_startups(read_record(p, log=True))
+    assert len(found) == 0 and len(found.skipped) == 2
+    assert all("column 'current_A' is 0 A at every one of its" in s and "dead channel" in s for s in found.skipped)
+    assert main(["split-startups", str(p), "--out", str(tmp_path / "o")]) == 2
+    assert "dead channel" in capsys.readouterr().err and not (tmp_path / "o").exists()
+
+
+def test_a_units_row_keeps_the_header_line_number(tmp_path):
+    """Under a units row, messages name the header's own line and the units' line.
+
+    Truth: the file the test writes has its header on line 1 and the units on line 2 (it said 'line 2 (header)
+    and 2 (units)', and 'the header (line 2)' for a short row).
+    """
+    rec = _record()
+    rows = [f"{_r(a)};{_r(b)};{_r(c)}" for a, b, c in zip(rec["t"], rec["I"], rec["n"])]
+    p = tmp_path / "r.csv"
+    p.write_text("Zeit;I_arm;n_mot\ns;A;1/min\n" + "\n".join(rows) + "\n")
+    with pytest.raises(DataError, match=r"r.csv: line 1 \(header\) and 2 \(units\): missing column 'time_s'"):
+        read_record(p)
+    p.write_text("time_s;current_A;speed_rpm\ns;A;1/min\n" + "\n".join(rows[:5] + ["1;2"] + rows[5:]) + "\n")
+    with pytest.raises(DataError, match=r"r.csv: line 8: 2 cells, but the header \(line 1\) has 3 columns"):
+        read_record(p)

@@ -251,6 +251,38 @@ def check_report_dir(args) -> None:
     if rep.exists() and not rep.is_dir():
         raise ConfigFileError(f"--report {rep} is a file, not a folder: give a folder (created if missing) for "
                               "the report files (HTML, JSON, figures)")
+    check_folder_can_be_made("--report", rep)
+
+
+def check_folder_can_be_made(flag: str, folder) -> None:
+    """Refuse an output folder that cannot exist or be written: a file on its path, or an existing folder on its
+    path that this user may not write into (checked before any work; the folder itself is made when writing).
+
+    Parameters
+    ----------
+    flag : str
+        The option that names the folder (``--report``, ``--out``), for the message.
+    folder : path-like
+        The output folder.
+
+    Raises
+    ------
+    ConfigFileError
+        Naming the option, the folder, what is in the way and the fix.
+    """
+    from ..errors import ConfigFileError
+
+    folder = Path(folder)
+    for up in (folder.absolute(), *folder.absolute().parents):
+        if not up.exists():
+            continue
+        if not up.is_dir():
+            raise ConfigFileError(f"{flag} {folder}: {up} is a file, so no folder can be made below it; give a "
+                                  "folder elsewhere")
+        if not os.access(up, os.W_OK | os.X_OK):
+            raise ConfigFileError(f"{flag} {folder}: cannot write into {up} (permission denied); give a folder you "
+                                  "may write into")
+        return
 
 
 def load_experiment_setup(args):

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from ..errors import ConfigFileError
 from . import print_json
-from .common import Command, add_options
+from .common import Command, add_options, check_folder_can_be_made
 
 __all__ = ["SplitStartupsCommand", "register"]
 
@@ -48,6 +48,8 @@ class SplitStartupsCommand(Command):
         if not args.out and not args.dry_run:
             raise ConfigFileError("give --out DIR (a new or empty folder for the records), or --dry-run to only list "
                                   "the start-ups")
+        if args.out and not args.dry_run:  # a --out that cannot be made is refused before the log is read
+            check_folder_can_be_made("--out", args.out)
         setup = load_setup(args.config)
         log = read_record(args.log, setup.params, record_columns(setup, args.columns), log=True)
         found = split_startups(log, setup.params, by=args.by, pre_s=args.pre, length_s=args.length)

@@ -409,9 +409,11 @@ def read_csv(path, params: Parameters | None = None, columns=None) -> Measuremen
         Missing or duplicated columns, a non-numeric or empty cell, a row of
         the wrong length, non-increasing time, NaN, a gap (a step above
         5 x the median), a record shorter than 2 s or 50 samples, a time
-        axis implausible for a start-up (milliseconds read as seconds), or a
-        channel whose scale suggests the wrong unit.  The message names the
-        file, the line and the column.
+        axis implausible for a start-up (milliseconds read as seconds), a
+        channel whose scale suggests the wrong unit, a current or speed
+        with one value at every sample (a dead channel), or a speed that
+        starts above 10 % of ``omega_ref`` (the record begins after the
+        start-up).  The message names the file, the line and the column.
     """
     from .tables import read_table
 
@@ -474,7 +476,8 @@ def _interpret(table, params, columns, *, log=False) -> Measurement:
     seen = set()
     for j, nm in enumerate(names):
         if not nm:
-            raise DataError(f"{head}, column {j + 1}: empty column name in the header")
+            raise DataError(f"{head}, column {j + 1}: empty column name in the header; name the column, or delete it "
+                            "(a row number written by pandas' to_csv? write the file with index=False)")
         if nm in seen:
             raise DataError(f"{head}: column {nm!r} appears twice in the header")
         seen.add(nm)
@@ -566,8 +569,12 @@ def _interpret(table, params, columns, *, log=False) -> Measurement:
     notes.extend(_speed_column_notes(arrays, parsed, names, found, kept, columns))
     if dropped:
         notes.append(f"columns ignored: {', '.join(dropped)}")
-    return _checked(arrays, rows, src, params, tuple(notes), row_word=table.row_word, labels=labels, log=log,
-                    time_name=parsed[tj][0])
+    m = _checked(arrays, rows, src, params, tuple(notes), row_word=table.row_word, labels=labels, log=log,
+                 time_name=parsed[tj][0])
+    if not log:  # a file must hold a start-up; arrays built in code may hold any test signal
+        _check_dead(m.channels, src, labels)
+        _check_starts_at_rest(m, src, labels, Parameters() if params is None else params)
+    return m
 
 
 #: a unit written at the end of a column's name, ``motor_current_A``, ``t_ms``, ``n_rad_s``
@@ -709,11 +716,11 @@ def _speed_column_notes(arrays, parsed, names, found, kept, columns) -> list[str
     j_speed = found["speed_rpm"][0]
     base = parsed[j_speed][0]
     t, v = arrays["time_s"], arrays["speed_rpm"]
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore"):  # repeated times are refused later, with their line
         slope = np.diff(v) / np.diff(t)
-    moving = np.abs(slope) > 1e-9
-    if v.size > 20 and moving.sum() > 10:
+        moving = np.abs(slope) > 1e-9
         change = np.abs(np.diff(slope[moving]))
+    if v.size > 20 and moving.sum() > 10:
         top = float(np.max(np.abs(v))) or 1.0
         dt = float(np.median(np.diff(t)))
         if np.isfinite(change).all() and np.median(change) * dt < 1e-6 * top:
@@ -744,6 +751,11 @@ def _unit_quantity(unit: str):
     return next((q for q, tab in UNITS.items() if unit.strip().lower() in tab), None)
 
 
+#: a number written with a thousands separator: ``1.234,5``, ``1,234.5``, ``1.234.567`` (not ``1,234``: a decimal
+#: comma as well)
+_THOUSANDS = re.compile(r"^[+-]?\d{1,3}(?P<sep>[.,])\d{3}(?:(?:(?P=sep)\d{3})+|(?:(?P=sep)\d{3})*(?!(?P=sep))[.,]\d*)$")
+
+
 def _cell_missing(c) -> bool:
     return c is None or (isinstance(c, float) and math.isnan(c)) or (isinstance(c, str) and not c)
 
@@ -769,7 +781,11 @@ def _numbers(table, j, label, required):
         try:
             float(c)
         except (TypeError, ValueError):
-            hint = " (decimal comma? write 1.5, not 1,5)" if isinstance(c, str) and "," in c else ""
+            hint = ""
+            if isinstance(c, str) and _THOUSANDS.match(c.strip()):
+                hint = " (a thousands separator? export the numbers without one: 1234.5, not 1.234,5 or 1,234.5)"
+            elif isinstance(c, str) and "," in c:
+                hint = f"; {table.decimal_clash}" if table.decimal_clash else " (decimal comma? write 1.5, not 1,5)"
             raise DataError(f"{table.where(k)}, column {label}: {c!r} is not a number{hint}") from None
     raise DataError(f"{table.source}: column {label}: not numeric")  # pragma: no cover - every cell converted
 
@@ -822,6 +838,8 @@ def _parse_stamps(table, col, label):
                 d = _dt.datetime.fromisoformat(c.strip())
             except ValueError:
                 d = None
+        if not isinstance(d, _dt.datetime) and isinstance(c, str) and "," in c and table.decimal_clash:
+            raise DataError(f"{table.where(k)}, column {label}: {c!r} is not a number; {table.decimal_clash}")
         if not isinstance(d, _dt.datetime):
             raise DataError(f"{table.where(k)}, column {label}: {c!r} is neither a number of seconds nor an ISO "
                             "8601 timestamp (e.g. 2024-03-01T06:15:00.020); give the time in one form for every row")
@@ -850,7 +868,7 @@ def _checked(arrays, lines, source, params, notes, row_word, labels=None, log=Fa
         bad = ~np.isfinite(a)
         if bad.any():
             k = int(np.argmax(bad))
-            what = "NaN (missing value)" if np.isnan(a[k]) else f"{a[k]!r} (not finite)"
+            what = "NaN (missing value)" if np.isnan(a[k]) else f"{float(a[k])!r} (not finite)"
             raise DataError(f"{where(k, name)}: {what}; kilnctl does not fill gaps: "
                             f"cut the record or fill the value yourself ({int(bad.sum())} such cells in this column)")
     t = arrays.pop("time_s")
@@ -861,8 +879,12 @@ def _checked(arrays, lines, source, params, notes, row_word, labels=None, log=Fa
     dts = np.diff(t)
     if (dts <= 0).any():
         k = int(np.argmax(dts <= 0)) + 1
+        stamped = any(str(n).startswith("time from timestamps") for n in notes)
+        hint = ("; the timestamps repeat: export them with fractions of a second (2024-03-01T06:15:00.020)"
+                if stamped and dts[k - 1] == 0 else "")
         raise DataError(f"{where(k, 'time_s')}: time {t[k]:.9g} s is not after "
-                        f"the previous sample's {t[k - 1]:.9g} s ({row_word} {int(lines[k - 1])}); time must increase")
+                        f"the previous sample's {t[k - 1]:.9g} s ({row_word} {int(lines[k - 1])}); time must increase"
+                        f"{hint}")
     med = float(np.median(dts))
     if not log and (dts > GAP_FACTOR * med).any():
         k = int(np.argmax(dts > GAP_FACTOR * med)) + 1
@@ -964,6 +986,41 @@ def _check_time_scale(t, dt, source, label, params, max_span, name="time_s", spe
     raise DataError(f"{source}: column {label}: {problem}; {fix}")
 
 
+def _check_dead(arrays, source, labels=None):
+    """Refuse a required channel that holds one value at every sample: a dead channel or the wrong column (its fit %
+    is not defined, and a diagnosis would explain a flat line)."""
+    for name in REQUIRED:
+        a = arrays.get(name)
+        if a is None or a.size == 0 or np.ptp(a) > 0:
+            continue
+        label = (labels or {}).get(name) or repr(name)
+        what = "armature current" if name == "current_A" else "motor speed"
+        still = "" if name == "current_A" else "; if the kiln did not move, the record holds no start-up to compare"
+        raise DataError(f"{source}: column {label} is {a[0]:.6g} {REQUIRED[name]} at every one of its {a.size} "
+                        "samples: a dead channel (sensor off, tag not logged) or the wrong column; export the "
+                        f"measured {what}, or map it with --columns {name}=NAME{still}")
+
+
+#: a current above this many times I_max, or a speed above this many times omega_ref, is in another unit
+TOO_LARGE = 5.0
+#: a record whose speed starts above this fraction of omega_ref does not start at rest
+START_AT_REST_FRACTION = 0.1
+
+
+def _check_starts_at_rest(m, source, labels, params):
+    """Refuse a record that begins with the motor already running: the model starts at rest, so there is no
+    start-up in it to compare (the first samples' median, so that noise does not decide)."""
+    w0 = float(np.median(m.speed[:5]))
+    if not w0 > START_AT_REST_FRACTION * params.omega_ref > 0:
+        return
+    at = _where(source, m.lines, 0, "speed_rpm", m.row_word, labels)
+    raise DataError(f"{at}: the record starts with the motor running ({w0:.4g} rpm over its first samples, "
+                    f"{100 * w0 / params.omega_ref:.0f} % of the setup's omega_ref = {params.omega_ref:g} rpm); "
+                    "compare and diagnose start the model at rest, so a record must begin before the start-up: "
+                    "export it from before the speed reference rises, or cut the start-ups out of a longer log with "
+                    "kilnctl split-startups")
+
+
 def _check_units(arrays, lines, source, params, row_word, labels=None, log=False):
     """Refuse channels whose scale suggests the wrong unit (in a long log only the rad/s and kA checks: a log may
     stand still for most of its length, and each start-up cut from it gets every check)."""
@@ -977,10 +1034,18 @@ def _check_units(arrays, lines, source, params, row_word, labels=None, log=False
         k = int(np.argmax(np.abs(a)))
         rad = w_ref / RPM_PER_RAD_S
         if 0.3 * rad < top < 0.12 * w_ref and top < 2.0 * rad:
+            pct = "" if abs(top / rad - 1.0) < 0.15 else (
+                f"; it is {100 * top / rad:.0f} % of that, so it may instead be per cent of a rated speed: then "
+                "convert it to rpm yourself")
             raise DataError(
                 f"{at}: largest value {top:.4g} looks like rad/s, not rpm (the setup's speed reference {w_ref:g} rpm "
                 f"is {rad:.4g} rad/s); multiply by 60/(2*pi) = 9.549, or write the unit in the header "
-                f"('{name} [rad/s]')")
+                f"('{name} [rad/s]'){pct}")
+        if not log and top > TOO_LARGE * w_ref > 0:
+            raise DataError(
+                f"{at}: largest value {top:.4g} is {top / w_ref:.0f} x the setup's speed reference {w_ref:g} rpm: not "
+                "a motor speed in rpm (a drive's internal units, 16384 = 100 %? a glitch value?); convert it to rpm, "
+                "or, if the setup's omega_ref is wrong, correct it in the setup file (--config)")
         kiln = w_ref / params.n
         if not log and 0 < top < 0.3 * rad and top < 3.0 * kiln:
             raise DataError(
@@ -996,6 +1061,12 @@ def _check_units(arrays, lines, source, params, row_word, labels=None, log=False
     cur = arrays["current_A"]
     top = float(np.max(np.abs(cur)))
     k = int(np.argmax(np.abs(cur)))
+    if not log and top > TOO_LARGE * params.I_max > 0:
+        raise DataError(
+            f"{_where(source, lines, k, 'current_A', row_word, labels)}: largest value {top:.4g} is "
+            f"{top / params.I_max:.0f} x the setup's current limit I_max = {params.I_max:g} A: looks like mA or a "
+            "drive's internal units (16384 = 100 %?), not A; give the current in A, or write the unit in the header "
+            "('current_A [mA]'); if the setup's I_max is wrong, correct it in the setup file (--config)")
     if 0 < top < 0.01 * params.I_max:
         raise DataError(
             f"{_where(source, lines, k, 'current_A', row_word, labels)}: largest value {top:.4g} looks like kA or a "

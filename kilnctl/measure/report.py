@@ -179,7 +179,12 @@ def write_report_files(folder, files: dict, protect=()) -> list[Path]:
     for path, content in targets.items():
         if isinstance(content, dict):
             content = json.dumps(content, indent=2, allow_nan=False)
-        written.append(write_atomic(path, content))
+        try:
+            written.append(write_atomic(path, content))
+        except OSError as exc:  # a folder that cannot be made or written (read-only, full disk, a file in the way)
+            raise ConfigFileError(f"--report {folder}: cannot write {path.name} ({exc.strerror or exc}); give a folder "
+                                  "you may write into" + (f" ({len(written)} of the report's files were written)"
+                                                          if written else "")) from None
     return written
 
 

@@ -30,7 +30,7 @@ import numpy as np
 
 from ..errors import DataError
 from ..params import Parameters
-from .io import Measurement, _checked
+from .io import Measurement, _check_dead, _checked
 
 __all__ = ["Startup", "Startups", "split_startups", "REST_FRACTION", "RUN_FRACTION", "STOP_FRACTION"]
 
@@ -109,9 +109,11 @@ class Startups:
         arrays = {"time_s": self.log.t[s.i0:s.i1]}
         arrays.update({k: v[s.i0:s.i1] for k, v in self.log.channels.items()})
         src = f"{self.log.source} start-up {n} ({self._row_word}s {s.rows[0]}-{s.rows[1]})"
-        return _checked(arrays, self.log.lines[s.i0:s.i1], src, self._params,
-                        (f"start-up {n} of {self.log.source}, ramp from t = {s.ramp_start:.3f} s",),
-                        row_word=self._row_word)
+        rec = _checked(arrays, self.log.lines[s.i0:s.i1], src, self._params,
+                       (f"start-up {n} of {self.log.source}, ramp from t = {s.ramp_start:.3f} s",),
+                       row_word=self._row_word)
+        _check_dead(rec.channels, src)
+        return rec
 
     def __len__(self) -> int:
         return len(self.items)
@@ -198,8 +200,12 @@ class Startups:
                 raise DataError(f"--out {out_dir} holds the log {p}: give another folder")
         texts = {f"startup_{n:02d}.csv": self._text(n, rec) for n, rec in enumerate(self.records(), start=1)}
         parent = out_dir.resolve().parent
-        parent.mkdir(parents=True, exist_ok=True)
-        tmp = Path(tempfile.mkdtemp(dir=parent, prefix=".tmp-split-"))
+        try:
+            parent.mkdir(parents=True, exist_ok=True)
+            tmp = Path(tempfile.mkdtemp(dir=parent, prefix=".tmp-split-"))
+        except OSError as exc:  # a file in the way, a read-only folder: nothing is written
+            raise DataError(f"--out {out_dir}: cannot make the folder ({exc.strerror or exc}); give a folder path "
+                            "you may write into") from None
         try:
             for name, text in texts.items():
                 (tmp / name).write_text(text)
@@ -215,6 +221,9 @@ class Startups:
                     for p in moved:
                         p.unlink(missing_ok=True)
                     raise
+        except OSError as exc:  # a full disk, a folder made read-only meanwhile: nothing is left behind
+            raise DataError(f"--out {out_dir}: cannot write the records ({exc.strerror or exc}); nothing was written; "
+                            "give a folder you may write into") from None
         finally:
             shutil.rmtree(tmp, ignore_errors=True)
         return [out_dir / name for name in texts]

@@ -205,6 +205,9 @@ class RawTable:
         the names are not on a line or row: Parquet, MATLAB).
     notes : list of str
         Remarks made while reading.
+    decimal_clash : str
+        Why decimal commas were not read (a cell with a decimal point elsewhere), for the message of a cell
+        that is then not a number; empty otherwise.
     """
 
     names: list
@@ -214,6 +217,7 @@ class RawTable:
     source: str
     header: str
     notes: list = field(default_factory=list)
+    decimal_clash: str = ""
 
     def where(self, k: int, column: str | None = None) -> str:
         """Return ``file: line N, column 'X'`` for sample ``k``.
@@ -263,6 +267,8 @@ def read_table(path, kind: str | None = None) -> RawTable:
     return {"csv": _read_text, "excel": _read_excel, "parquet": _read_parquet, "matlab": _read_mat}[kind](path)
 
 
+#: the first line Excel writes (and reads) to name a CSV file's separator: ``sep=;``
+_SEP_LINE = re.compile(r'^"?sep=(.)"?$', re.IGNORECASE)
 _DECIMAL_COMMA = re.compile(r"^[+-]?\d+,\d*(?:[eE][+-]?\d+)?$")
 
 
@@ -289,14 +295,19 @@ def _read_text(path: Path) -> RawTable:
     header = None
     cells: list[list[str]] = []
     lines: list[int] = []
-    delim = ","
+    delim, forced = ",", None
     units_line = None
     for lineno, line in enumerate(text.splitlines(), start=1):
         s = line.strip()
         if not s or s.startswith("#"):
             continue
+        sep = _SEP_LINE.match(line.strip(" \r\n")) if header is None else None
+        if sep:  # Excel's separator line ('sep=;') before the header
+            delim = forced = sep.group(1)
+            continue
         if header is None:
-            delim = ";" if (";" in s and "," not in s) else ("\t" if ("\t" in s and "," not in s) else ",")
+            if not forced:
+                delim = ";" if (";" in s and "," not in s) else ("\t" if ("\t" in s and "," not in s) else ",")
             names = [h.strip() for h in next(csv.reader([s], delimiter=delim))]
             while len(names) > 1 and not names[-1]:  # a trailing separator: an empty last column
                 names.pop()
@@ -309,8 +320,8 @@ def _read_text(path: Path) -> RawTable:
                 and len(row) == len(header[1]):
             # a units row under the header (``s;A;rpm``): the units join the names, as ``Time [s]``
             units_line = lineno
-            header = (lineno, [f"{nm} [{_unit_cell(u)}]" if u and split_unit(nm)[1] is None else nm
-                               for nm, u in zip(header[1], row)])
+            header = (header[0], [f"{nm} [{_unit_cell(u)}]" if u and split_unit(nm)[1] is None else nm
+                                  for nm, u in zip(header[1], row)])
             notes.append(f"units read from line {lineno} (under the header)")
             continue
         if len(row) != len(header[1]):
@@ -324,16 +335,25 @@ def _read_text(path: Path) -> RawTable:
     if not cells:
         raise DataError(f"{path}: no data rows after the header (line {hline})")
     arr = np.array(cells, dtype=object)
+    clash = ""
     if delim != ",":
         # decimal commas (``1,5``) in a file separated by ';' or tabs, where a comma can mean nothing else;
         # only when no cell of the file has a decimal point, so a file never mixes both readings
         flat = [c for r in cells for c in r]
-        if any(_DECIMAL_COMMA.match(c) for c in flat) and not any("." in c and _is_number(c) for c in flat):
-            arr = np.array([[c.replace(",", ".") if _DECIMAL_COMMA.match(c) else c for c in r] for r in cells],
-                           dtype=object)
-            notes.append("decimal commas read as decimal points (a ';'- or tab-separated file)")
+        if any(_DECIMAL_COMMA.match(c) for c in flat):
+            point = next(((k, j) for k, r in enumerate(cells) for j, c in enumerate(r) if "." in c and _is_number(c)),
+                         None)
+            if point is None:
+                arr = np.array([[c.replace(",", ".") if _DECIMAL_COMMA.match(c) else c for c in r] for r in cells],
+                               dtype=object)
+                notes.append("decimal commas read as decimal points (a ';'- or tab-separated file)")
+            else:
+                k, j = point
+                clash = (f"decimal commas are not read, because line {lines[k]}, column {names[j]!r} has a decimal "
+                         f"point ({cells[k][j]!r}): give every number of the file with one decimal sign")
     head = f"line {hline} (header)" + (f" and {units_line} (units)" if units_line else "")
-    return RawTable(names, [arr[:, j] for j in range(len(names))], np.array(lines), "line", str(path), head, notes)
+    return RawTable(names, [arr[:, j] for j in range(len(names))], np.array(lines), "line", str(path), head, notes,
+                    clash)
 
 
 def _is_number(c: str) -> bool:
