@@ -90,3 +90,16 @@ def test_a_hunting_loop_is_fitted_by_the_lag_that_matches_its_frequency(tmp_path
     assert plain.fit_percent_["current_A"] < 20.0
     assert matched.fit_percent_["current_A"] > 90.0
     assert matched.values_["tau_s"] == pytest.approx(truth["catalogue_values"]["tau_s"], rel=0.02)
+
+
+def test_the_text_a_user_reads_about_a_hunting_loop():
+    """The summary's and the HTML page's sentence, from a constructed oscillation, and its JSON form."""
+    from kilnctl.measure.oscillation import Oscillation
+    from kilnctl.measure.report import oscillation_dict, oscillation_text
+
+    osc = Oscillation(8.2463, 715.2, 0.912)
+    assert oscillation_text(osc) == (
+        "The record's current oscillates at 8.25 Hz after the ramp (715 A RMS, 91 % of its variance): a loop "
+        "hunting. Each candidate with one parameter was also started where the model oscillates at that frequency.")
+    assert oscillation_dict(osc) == {"f_hz": 8.2463, "rms_A": 715.2, "share": 0.912}
+    assert oscillation_dict(None) is None

@@ -496,9 +496,9 @@ def oscillation_dict(osc) -> dict | None:
 
 def oscillation_text(osc) -> str:
     """What a user reads about a sustained oscillation of the record's current after the ramp."""
-    return (f"the record's current oscillates at {osc.f_hz:.2f} Hz after the ramp ({osc.rms:.0f} A RMS, "
-            f"{100 * osc.share:.0f} % of its variance): a loop hunting.  Each candidate with one parameter was "
-            "also started where the model oscillates at that frequency")
+    return (f"The record's current oscillates at {osc.f_hz:.2f} Hz after the ramp ({osc.rms:.0f} A RMS, "
+            f"{100 * osc.share:.0f} % of its variance): a loop hunting. Each candidate with one parameter was "
+            "also started where the model oscillates at that frequency.")
 
 
 def diagnosis_dict(d) -> dict:
@@ -1040,6 +1040,8 @@ def diagnosis_html(d, figs=None) -> str:
                  f"(current fit {d.final_['current_A']:.1f} %, speed fit {d.final_['speed_rpm']:.1f} %).</p>")
     parts.append(parameter_table(fc.names_, fc.values_, fc.stderr_, not_identifiable=fc.not_identifiable_,
                                  on_bound=fc.on_bound_))
+    if getattr(d, "oscillation_", None) is not None:
+        parts.append(f"<p>{esc(oscillation_text(d.oscillation_))}</p>")
     parts.append("<h2>Candidates</h2>")
     parts.append(figure_block(f_rank, "ranking", "Green: supported (both tests passed); grey: not supported. "
                               "Left: dBIC, plain (solid) and whitened (hatched), the round-1 table's two dBIC "
