@@ -280,3 +280,24 @@ def test_a_report_file_that_cannot_be_written_is_a_clear_error(tmp_path, monkeyp
     monkeypatch.setattr(report, "write_atomic", full)
     with pytest.raises(ConfigFileError, match=r"--report .*rep: cannot write a.json \(No space left on device\)"):
         report.write_report_files(tmp_path / "rep", {"a.json": {"x": 1}})
+
+
+def test_report_folder_holding_an_input_of_a_report_name_is_refused_before_the_work(tmp_path, capsys, monkeypatch):
+    """``--report DIR`` where the ``--data`` file is ``DIR/diagnose.json`` or ``DIR/compare.json``: the report would
+    overwrite it (the writer refused that only after the work).
+
+    Truth: the names the report writes (``<command>.html``, ``<command>.json``); reading the record is replaced by a
+    function that fails the test, so the refusal must come before it, and the input must be untouched.
+    """
+    from kilnctl.cli import main
+    from kilnctl.measure import example_paths
+
+    raw = example_paths()[0].read_bytes()
+    monkeypatch.setattr("kilnctl.measure.io.read_record", lambda *a, **k: pytest.fail("the record was read"))
+    for command in ("compare", "diagnose"):
+        data = tmp_path / f"{command}.json"
+        data.write_bytes(raw)
+        assert main([command, "--data", str(data), "--report", str(tmp_path)]) == 2
+        err = capsys.readouterr().err
+        assert f"holds the --data file {command}.json, which the report would overwrite" in err
+        assert "Traceback" not in err and data.read_bytes() == raw

@@ -251,6 +251,16 @@ def check_report_dir(args) -> None:
     if rep.exists() and not rep.is_dir():
         raise ConfigFileError(f"--report {rep} is a file, not a folder: give a folder (created if missing) for "
                               "the report files (HTML, JSON, figures)")
+    # the report writes <command>.html, <command>.json and <command>_*.png: an input of such a name in the folder
+    # would be refused only when writing, after the work
+    stem = getattr(args, "command", None)
+    for flag, given in (("--data", args.data), ("--config", args.config)):
+        if not (stem and given) or Path(given).absolute().parent != rep.absolute():
+            continue
+        name = Path(given).name
+        if name in (f"{stem}.html", f"{stem}.json") or (name.startswith(f"{stem}_") and name.endswith(".png")):
+            raise ConfigFileError(f"--report {rep} holds the {flag} file {name}, which the report would overwrite: "
+                                  "give another folder for the report, or move the input")
     check_folder_can_be_made("--report", rep)
 
 
