@@ -8,7 +8,7 @@ too few periods).
 import numpy as np
 import pytest
 
-from kilnctl.measure.oscillation import MIN_HZ, dominant_oscillation
+from kilnctl.measure.oscillation import MIN_HZ, Oscillation, dominant_oscillation, matching_value
 
 
 def _signal(f_hz, amp, t_end=40.0, fs=50.0, noise=20.0, seed=0):
@@ -94,7 +94,6 @@ def test_a_hunting_loop_is_fitted_by_the_lag_that_matches_its_frequency(tmp_path
 
 def test_the_text_a_user_reads_about_a_hunting_loop():
     """The summary's and the HTML page's sentence, from a constructed oscillation, and its JSON form."""
-    from kilnctl.measure.oscillation import Oscillation
     from kilnctl.measure.report import oscillation_dict, oscillation_text
 
     osc = Oscillation(8.2463, 715.2, 0.912)
@@ -103,3 +102,23 @@ def test_the_text_a_user_reads_about_a_hunting_loop():
         "hunting. Each candidate with one parameter was also started where the model oscillates at that frequency.")
     assert oscillation_dict(osc) == {"f_hz": 8.2463, "rms_A": 715.2, "share": 0.912}
     assert oscillation_dict(None) is None
+
+
+def test_the_value_whose_oscillation_matches_the_record_is_found_between_the_grid_values():
+    """Truth: a constructed model whose signal oscillates at 100/v Hz with amplitude 1000 for v >= 5 and holds no
+    oscillation below (a loop stable for short lags); the record's 8.25 Hz is matched at v = 100/8.25 = 12.1212...,
+    between the grid values 10 and 20.  A grid that does not bracket it, or whose neighbours do not both
+    oscillate, gives None."""
+    t = np.arange(0.0, 40.0, 0.02)
+
+    def signal_at(v):
+        if v < 5.0:
+            return 400.0 + 0.0 * t
+        return 400.0 + 1000.0 * np.sin(2 * np.pi * (100.0 / v) * t) * (t >= 8.0)
+
+    target = Oscillation(8.25, 1000.0 / np.sqrt(2), 0.99)
+    v = matching_value(signal_at, [1.0, 10.0, 20.0, 40.0], target, t, 9.0)
+    assert v == pytest.approx(100.0 / 8.25, rel=1e-3)
+    assert matching_value(signal_at, [20.0, 40.0], target, t, 9.0) is None  # 5-2.5 Hz: no crossing
+    assert matching_value(signal_at, [1.0, 40.0], target, t, 9.0) is None  # one neighbour without a cycle
+    assert matching_value(lambda v: None, [10.0, 20.0], target, t, 9.0) is None  # the model cannot be run

@@ -45,7 +45,7 @@ from .effects import CATALOGUE, DEFAULT_CALIBRATE, effect_components, grid_start
 from .breakaways import breakaways
 from .io import Measurement
 from .evidence import holdout_z, whitened_delta_bic
-from .oscillation import dominant_oscillation
+from .oscillation import dominant_oscillation, matching_value
 from .runner import CHANNELS, run_model
 from .signature import residual_signature, standstill_offsets
 from .stats import failing_intervals, fit_percent
@@ -678,7 +678,7 @@ class Diagnosis:
     def _missing_oscillation(self, m, current, exp):
         """The record's oscillation after the ramp (:func:`~kilnctl.measure.oscillation.dominant_oscillation`)
         when the current model has none at its frequency (within :data:`OSCILLATION_MATCH`), else None."""
-        rec = getattr(self, "oscillation_", None)
+        rec = self.oscillation_
         if rec is None:
             return None
         active = m.t >= exp.t0 - 1e-9
@@ -687,54 +687,13 @@ class Diagnosis:
             return None
         return rec
 
-    def _match_oscillation(self, m, exp, model, comps, p, values, par, values_tried, osc):
-        """The value of the effect's parameter ``par`` at which the model oscillates at the record's frequency.
-
-        The model is run at ``values`` with ``par`` at each of ``values_tried``; where two neighbouring values
-        both make it oscillate (:func:`~kilnctl.measure.oscillation.dominant_oscillation`) on either side of
-        the record's frequency, the crossing is found by Brent's method.  Of several crossings the one whose
-        oscillation's RMS is nearest the record's.  None when there is no crossing.
-        """
-        from scipy.optimize import brentq
-
-        active = m.t >= exp.t0 - 1e-9
-        t_act = m.t[active]
-
-        def osc_at(v):
-            try:
-                run = run_model(p.replace(**dict(values, **{par: float(v)})), m, exp, model=model, effects=comps)
-            except KilnctlError:
-                return None
-            return dominant_oscillation(t_act, run.outputs["current_A"], exp.steady_from)
-
-        grid = np.unique(np.asarray(values_tried, float))
-        found = [osc_at(v) for v in grid]
-        best = None
-        for k in range(grid.size - 1):
-            a, b = found[k], found[k + 1]
-            if a is None or b is None or (a.f_hz - osc.f_hz) * (b.f_hz - osc.f_hz) > 0:
-                continue
-
-            def gap(v):
-                o = osc_at(v)
-                return (o.f_hz if o is not None else 0.0) - osc.f_hz
-
-            try:
-                v = brentq(gap, grid[k], grid[k + 1], xtol=1e-6 * grid[k + 1], rtol=1e-6)
-            except (ValueError, RuntimeError):
-                continue
-            o = osc_at(v)
-            if o is not None and (best is None or abs(o.rms - osc.rms) < best[1]):
-                best = (float(v), abs(o.rms - osc.rms))
-        return None if best is None else best[0]
-
     def _refit(self, m, params, selected, name, current_values, first_failure, scales, train, exp, before=None,
                oscillation=None):
         """Refit base + ``selected`` + ``name`` on the fitting part (in a worker process when workers > 1).
 
         ``oscillation``: the record's oscillation after the ramp, when the current model lacks it.  For an
         effect with one parameter, a second refit then starts where the model oscillates at the record's
-        frequency (:meth:`_match_oscillation`), and the refit of lower cost is kept: a limit cycle's phase
+        frequency (:meth:`_refit_at_frequency`), and the refit of lower cost is kept: a limit cycle's phase
         fits only in a valley about a millisecond of lag wide, which no grid finds, and its frequency
         changes smoothly with the parameter.
 
@@ -787,28 +746,52 @@ class Diagnosis:
                                   first_failure=first_failure, new_effect=name, n_local=n_local)
         except KilnctlError as exc:
             return None, f"could not be fitted: {exc}", time.perf_counter() - t_start
-        own = [fp.name for fp in eff.parameters]
-        if oscillation is not None and len(own) == 1 and not getattr(eff.parameters[0], "partner", None):
-            tried = [g[own[0]] for g in effect_starts if own[0] in g]
-            v = self._match_oscillation(m, exp, model, comps, p, init, own[0], tried, oscillation) if tried else None
-            if v is not None:
-                # the cycle's phase over the record: a valley a few hundredths of the frequency-matched value
-                # wide (a 30 ms lag: about 1 ms), and where the cycle begins, which the kiln's inertia sets (the
-                # speed's approach to its set point).  The values within 5 % of the match times J_v within 10 %
-                # of the current model's are compared by their cost (231 runs), and the best is fitted
-                phase = [{own[0]: v * (1.0 + d)} for d in np.linspace(-0.05, 0.05, PHASE_STEPS)]
-                if "J_v" in init:
-                    phase = [dict(g, J_v=init["J_v"] * f) for f in np.linspace(0.9, 1.1, INERTIA_STEPS)
-                             for g in phase]
-                try:
-                    cal2 = self._calibrate(m, params, effects, scales, train, dict(init, **{own[0]: v}), phase,
-                                           experiment=exp, first_failure=first_failure, new_effect=name,
-                                           n_local=1)
-                except KilnctlError:
-                    cal2 = None
-                if cal2 is not None and cal2.cost_ < cal.cost_:
-                    cal = cal2
+        if oscillation is not None:
+            matched = self._refit_at_frequency(m, params, effects, (model, comps, p), init, effect_starts,
+                                               oscillation, scales, train, exp, first_failure)
+            if matched is not None and matched.cost_ < cal.cost_:
+                cal = matched
         return cal, None, time.perf_counter() - t_start
+
+    def _refit_at_frequency(self, m, params, effects, built, init, effect_starts, oscillation, scales, train, exp,
+                            first_failure):
+        """A refit of ``effects`` (the last one with one parameter; ``built``: their model, components and
+        parameters from :meth:`_structure`) from where the model oscillates at the record's frequency (:func:`~kilnctl.measure.oscillation.matching_value` over the values of
+        ``effect_starts``), or None when the effect has more parameters, no value matches or the fit fails.
+
+        The cycle's phase over the record lies in a valley a few hundredths of the matched value wide (a 30 ms
+        lag: about 1 ms) and depends on where the cycle begins, which the kiln's inertia sets (the speed's
+        approach to its set point): the values within 5 % of the match (:data:`PHASE_STEPS`) times J_v within
+        10 % of ``init``'s (:data:`INERTIA_STEPS`) are compared by their cost, and the best is fitted."""
+        name = effects[-1]
+        eff = CATALOGUE[name]
+        if len(eff.parameters) != 1 or eff.parameters[0].partner:
+            return None
+        par = eff.parameters[0].name
+        tried = [g[par] for g in effect_starts if par in g]
+        if not tried:
+            return None
+        model, comps, p = built
+        active = m.t >= exp.t0 - 1e-9
+
+        def current_at(v):
+            try:
+                run = run_model(p.replace(**dict(init, **{par: v})), m, exp, model=model, effects=comps)
+            except KilnctlError:
+                return None
+            return run.outputs["current_A"]
+
+        v = matching_value(current_at, tried, oscillation, m.t[active], exp.steady_from)
+        if v is None:
+            return None
+        phase = [{par: v * (1.0 + d)} for d in np.linspace(-0.05, 0.05, PHASE_STEPS)]
+        if "J_v" in init:
+            phase = [dict(g, J_v=init["J_v"] * f) for f in np.linspace(0.9, 1.1, INERTIA_STEPS) for g in phase]
+        try:
+            return self._calibrate(m, params, effects, scales, train, dict(init, **{par: v}), phase, experiment=exp,
+                                   first_failure=first_failure, new_effect=name, n_local=1)
+        except KilnctlError:
+            return None
 
     def _try_all(self, m, params, selected, names, current, scales, train, test, exp, pool, say, before):
         """Refit every candidate of a round (in parallel when a pool is given) and judge each one.

@@ -12,7 +12,7 @@ beside it fits worse than a model without any cycle.  The frequency, by
 contrast, changes smoothly and monotonically with the lag (29-31 ms:
 8.37-8.13 Hz), so :func:`dominant_oscillation` measures it on record and
 model alike, and the diagnosis matches it before the ordinary fit
-(:meth:`kilnctl.measure.diagnose.Diagnosis._refit`).
+(:meth:`kilnctl.measure.diagnose.Diagnosis._refit_at_frequency`, with :func:`matching_value`).
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ import numpy as np
 
 from .stats import median_step
 
-__all__ = ["Oscillation", "dominant_oscillation", "MIN_HZ", "MIN_SHARE", "MIN_PERIODS"]
+__all__ = ["Oscillation", "dominant_oscillation", "matching_value", "MIN_HZ", "MIN_SHARE", "MIN_PERIODS"]
 
 #: lowest frequency counted as a loop oscillation [Hz]: stick-slip cycles (periods of seconds) and the kiln's
 #: revolution (about 0.1 Hz) lie below
@@ -109,3 +109,59 @@ def dominant_oscillation(t, y, t_from: float) -> Oscillation | None:
     if f_hz < MIN_HZ or f_hz * (grid[-1] - grid[0]) < MIN_PERIODS or share < MIN_SHARE:
         return None
     return Oscillation(f_hz, float(np.sqrt(share * var)), share)
+
+
+def matching_value(signal_at, values, target: Oscillation, t, t_from: float) -> float | None:
+    """The parameter value at which a model's signal oscillates at ``target``'s frequency, or None.
+
+    The signal is made at each of ``values``; where two neighbouring values
+    both make it oscillate (:func:`dominant_oscillation`) on either side of
+    the target frequency, the crossing is found by Brent's method.  Of
+    several crossings the one whose oscillation's RMS is nearest the
+    target's.
+
+    Parameters
+    ----------
+    signal_at : callable
+        ``signal_at(value) -> ndarray or None``: the model's signal at the
+        sample times ``t`` with the parameter at ``value`` (None: the model
+        cannot be run there).
+    values : array_like
+        Parameter values to bracket the crossing with [unit of the parameter].
+    target : Oscillation
+        The record's oscillation.
+    t : array_like
+        Sample times [s].
+    t_from : float
+        Where the analysed part begins [s].
+
+    Returns
+    -------
+    float or None
+    """
+    from scipy.optimize import brentq
+
+    def osc_at(v):
+        y = signal_at(float(v))
+        return None if y is None else dominant_oscillation(t, y, t_from)
+
+    grid = np.unique(np.asarray(values, float))
+    found = [osc_at(v) for v in grid]
+    best = None
+    for k in range(grid.size - 1):
+        a, b = found[k], found[k + 1]
+        if a is None or b is None or (a.f_hz - target.f_hz) * (b.f_hz - target.f_hz) > 0:
+            continue
+
+        def gap(v):
+            o = osc_at(v)
+            return (o.f_hz if o is not None else 0.0) - target.f_hz
+
+        try:
+            v = brentq(gap, grid[k], grid[k + 1], xtol=1e-6 * grid[k + 1], rtol=1e-6)
+        except (ValueError, RuntimeError):
+            continue
+        o = osc_at(v)
+        if o is not None and (best is None or abs(o.rms - target.rms) < best[1]):
+            best = (float(v), abs(o.rms - target.rms))
+    return None if best is None else best[0]
