@@ -93,3 +93,23 @@ def test_whitening_filter_turns_coloured_noise_white():
     ac = autocorr(whiten(e, a)[a.size:], 50)
     assert ac["n_outside"] <= 3
     assert noise_filter(rng.standard_normal(n)).size == 0  # white noise needs no filter
+
+
+def test_no_local_fit_judges_the_structure_at_the_given_values():
+    # truth: the model run directly at the given values (run_model), its squared error summed by hand over the
+    # samples from the start of the experiment; n_local=0 asks for no fit, so nothing may move
+    from kilnctl.measure.calibrate import Calibration
+    from kilnctl.measure.synthetic import DEFAULT_GAINS, make_record
+
+    setup = resolve_gains(Parameters(DEFAULT_GAINS))
+    m, _ = make_record((), seed=5, t_end=12.0)
+    given = {"mu_c": 0.9 * setup.mu_c, "mu_s": 1.1 * setup.mu_s, "m_v": setup.m_v, "J_v": 1.2 * setup.J_v}
+    cal = Calibration(setup, ("mu_c", "mu_s", "m_v", "J_v")).fit(m, init=given, starts=[], n_local=0)
+    assert cal.values_ == pytest.approx(given, rel=1e-12)
+    assert cal.local_fits_ == []
+    exp = m.experiment(setup)
+    run = run_model(setup.replace(**given), m, exp)
+    active = m.t >= exp.t0 - 1e-9
+    for c in ("current_A", "speed_rpm"):
+        direct = float(np.sum((m.channels[c][active] - run.outputs[c]) ** 2))
+        assert cal.rss_[c] == pytest.approx(direct, rel=1e-9)

@@ -428,6 +428,55 @@ def test_backward_check_removes_an_effect_the_plant_does_not_have(second_motor_c
     assert "J_m2" in current.values_ and "B_o" not in current.values_
 
 
+def test_backward_check_starts_each_smaller_structure_at_the_current_values():
+    """Truth: the current model's values, given.  The structure without one effect is refitted from all of them
+    that it has, the other effects' parameters included (they were once left out: the refit then began at
+    the catalogue's default stiffness and damping, and a stand-in beside them looked needed)."""
+    d = Diagnosis(SETUP)
+    values = {"mu_c": 0.39, "mu_s": 0.49, "m_v": 5.6e5, "J_v": 1.6e6, "k_po": 8.2e7, "C_po": 6.4e5, "B_o": 8.0}
+    seen = []
+
+    def calibrations(args, pool):
+        seen.extend(args)
+        return [None] * len(args)  # none can be fitted: every effect stays, and the check ends
+
+    d._first_failure = lambda *a: None
+    d._run_calibrations = calibrations
+    current = SimpleNamespace(values_=values)
+    selected, kept, removed = d._backward(None, SETUP, ["drivetrain_compliance", "viscous_drag"], current, {},
+                                          None, None, None, None, None, lambda s: None)
+    assert selected == ["drivetrain_compliance", "viscous_drag"] and kept is current and removed == []
+    inits = {a[2]: a[5] for a in seen}
+    base = {k: values[k] for k in ("mu_c", "mu_s", "m_v", "J_v")}
+    assert inits[("viscous_drag",)] == dict(base, B_o=8.0)
+    assert inits[("drivetrain_compliance",)] == dict(base, k_po=8.2e7, C_po=6.4e5)
+
+
+@pytest.mark.slow  # two evaluations and a refit of a two-effect structure on top of the shared diagnosis
+def test_final_check_removes_an_effect_left_at_its_null_value(second_motor_case):
+    """Truth: the plant has a second motor of 30 kg m^2 and no drag.  A final model holding a drag at its lower
+    bound (1000 N m s/rad, a thousandth of the usual) beside the second motor loses the drag in the final
+    check; the second motor, which the record needs, stays, and the rest is refitted from the final values."""
+    from kilnctl.simulate import resolve_gains
+
+    m, truth, d = second_motor_case
+    params = resolve_gains(d.params)
+    exp = d.experiment_
+    init = dict(d.final_calibration_.values_, B_o=1e3)
+    both = d._calibrate(m, params, ("second_motor", "viscous_drag"), "std", None, init, (), exp, None, None, 0,
+                        True)
+    assert both.values_ == pytest.approx(init, rel=1e-12)
+    selected, final, dropped = d._final_check(m, params, ["second_motor", "viscous_drag"], both, d.scales_,
+                                              d.train_, d.test_, exp, lambda s: None)
+    assert selected == ["second_motor"]
+    assert [r.effect for r in dropped] == ["viscous_drag"] and not dropped[0].supported
+    assert "final check" in dropped[0].reason and dropped[0].delta_bic > -d.min_delta_bic
+    start = {k: v for k, v in init.items() if k != "B_o"}
+    without = d._calibrate(m, params, ("second_motor",), "std", None, start, (), exp, None, None, 0, True)
+    assert "B_o" not in final.values_ and final.cost_ <= without.cost_
+    assert final.values_["J_m2"] == pytest.approx(truth["magnitudes"]["J_m2"], rel=0.2)
+
+
 def test_a_current_offset_at_standstill_is_reported_and_a_clean_record_says_nothing():
     """Truth by construction: 2 s at rest (white noise of 4 A on the current) put before a synthetic start-up,
     once with +25 A added to every current sample (a sensor offset) and once without."""

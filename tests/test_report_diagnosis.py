@@ -206,5 +206,5 @@ def test_an_effect_the_backward_check_removed_is_reported_with_why_everywhere():
 
     page = html.unescape(report.diagnosis_html(d, {"s": report.plot_ranking(d), "r": report.plot_ranking(d)}))
     assert "<h3>Round 2: against base + drivetrain_compliance</h3>" in page
-    tail = page[page.index("Backward check: effects removed"):]
+    tail = page[page.index("Effects added, then removed"):]
     assert "<td>+3.0</td><td>+2.0</td>" in tail and "removed: removed in the backward check" in tail

@@ -886,7 +886,9 @@ class Calibration:
             other starting points that lie apart from each other (more than
             one scaled unit, i.e. a factor e for log-scaled parameters, unless
             ``separation`` says otherwise; the best one is taken however close
-            it lies to ``init``); the lowest final cost wins.
+            it lies to ``init``); the lowest final cost wins.  0: no local fit,
+            the statistics at ``init`` (to judge a structure at values fitted
+            in a larger one).
         separation : float, default 1.0
             Least distance (largest scaled-coordinate difference) between two
             starting points of local fits [-].
@@ -945,14 +947,16 @@ class Calibration:
             search.set_horizon(1.0)
             search.set_smoothing(0.0)
             prob.cycles_from = search.cycles_from
-        firsts = starts.choose(u0s, [search.trial(u).cost for u in u0s] if len(u0s) > 1 else [0.0])
+        firsts = [] if starts.n_local == 0 else \
+            starts.choose(u0s, [search.trial(u).cost for u in u0s] if len(u0s) > 1 else [0.0])
         prob.cycles_from = None
         search.cache.clear()
         results = search.fit_all(firsts, horizons, smoothing)
         # the given starting point stays a candidate: a refit is never worse than the values it started from
         # (a local fit on a rugged cost, or through a smoothed residual, can end above where it began)
-        if space.coords:
-            results.append(_Local(u0s[0], None, "the starting values: no local fit improved on them",
+        if space.coords or not results:
+            results.append(_Local(u0s[0], None, "the starting values: no local fit improved on them" if firsts
+                                  else "the starting values (no local fit asked for)",
                                   search.trial(u0s[0]).cost, u0s[0]))
         best_fit = min(results, key=lambda r: r.cost)
         u = best_fit.u if space.coords else np.zeros(0)

@@ -214,12 +214,14 @@ class Diagnosis:
         Sensor offsets seen while the drive stands still before the start-up (see
         :func:`standstill_offsets`); each is also a caution and part of ``unexplained_``.
     removed_ : list of CandidateResult
-        Effects the greedy search added and the backward check removed (see :meth:`_backward`), with why.
+        Effects the greedy search added and the backward check (see :meth:`_backward`) or the final check
+        (see :meth:`_final_check`) removed, with why.
     final_search_ : dict
         How the final structure was refitted: ``n_starts`` (starting points
         compared by cost), ``n_local_fits``, their final ``costs`` [-] and
         current ``fit_current_percent`` [%], and the ``kept_cost`` (the
-        lowest: the fit reported).
+        lowest), and ``then_removed``: effects the final check then removed
+        (the structure without them refitted from there is the fit reported).
     oscillation_ : Oscillation or None
         A sustained oscillation of the record's current after the ramp (a speed loop hunting: frequency,
         RMS, share of the variance; :func:`~kilnctl.measure.oscillation.dominant_oscillation`), or None.
@@ -283,8 +285,14 @@ class Diagnosis:
         comps, p = effect_components(effects, params, model=model)
         free = list(self.calibrate)
         for e in effects:
-            free += [fp for fp in CATALOGUE[e].parameters if fp.name not in free]
+            have = {f if isinstance(f, str) else f.name for f in free}
+            free += [fp for fp in CATALOGUE[e].parameters if fp.name not in have]
         return model, comps, p, free
+
+    def _free_names(self, params, effects) -> set:
+        """Names of the parameters calibrated with base + effects."""
+        _, _, _, free = self._structure(params, effects)
+        return {f if isinstance(f, str) else f.name for f in free}
 
     def _calibrate(self, m, params, effects, scales, mask, init, starts=(), experiment=None,
                    first_failure=None, new_effect=None, n_local=None, full_schedule=False) -> Calibration:
@@ -486,9 +494,12 @@ class Diagnosis:
             final = self._final_fit(m, params, tuple(selected), current, exp, pool, base)
         else:
             final = base
+        self.final_search_ = _search_summary(final)
+        selected, final, dropped = self._final_check(m, params, selected, final, scales, train, test, exp, say)
+        self.removed_ = list(self.removed_) + dropped
+        self.final_search_["then_removed"] = [r.effect for r in dropped]
         self.base_calibration_ = base
         self.final_calibration_ = final
-        self.final_search_ = _search_summary(final)
         self.baseline_ = dict(base.fit_percent_)
         self.final_ = dict(final.fit_percent_)
         self.rounds_ = rounds
@@ -570,8 +581,7 @@ class Diagnosis:
             args = []
             for e in selected:
                 rest = tuple(x for x in selected if x != e)
-                _, _, _, free = self._structure(params, rest)
-                init = {k: v for k, v in current.values_.items() if k in free}
+                init = {k: v for k, v in current.values_.items() if k in self._free_names(params, rest)}
                 args.append((m, params, rest, scales, train, init, (), exp, ff))
             cals = self._run_calibrations(args, pool)
             trials = []
@@ -598,6 +608,56 @@ class Diagnosis:
             say(f"removed {e}: with {others} in the model it no longer earns its place")
             selected, current = list(rest), cal
         return selected, current, removed
+
+    def _final_check(self, m, params, selected, final, scales, train, test, exp, say):
+        """Every effect of the final model must matter at its final values, on the whole record.
+
+        The greedy rounds judge an effect by refits on the fitting part, where its parameters can buy the
+        others an escape from a valley that the final fit, from more starts on the whole record, leaves
+        anyway: the effect then ends at or near its null value (a drag of 8 N m s/rad) or inactive (a current
+        limit above the peak current), while the rounds credited it with the escape.  For each selected
+        effect the structure without it is judged at the final values (no refit, :meth:`Calibration.fit`
+        with ``n_local=0``).  Its BIC is an upper bound of what that structure reaches, so when it is not
+        more than ``min_delta_bic`` above the final model's the effect fails the criterion it was selected
+        by, on the record as a whole.  The effect with the weakest evidence is removed, the rest is refitted
+        from there (one local fit, never ending above its start) and the check repeats.
+
+        Returns
+        -------
+        (list of str, Calibration, list of CandidateResult)
+            The selection kept, its calibration on the whole record, and a result for each removed effect
+            (its dBIC is the final model's against the structure without it, both on the whole record).
+        """
+        selected, dropped = list(selected), []
+        while selected:
+            trials = []
+            for e in selected:
+                rest = tuple(x for x in selected if x != e)
+                init = {k: v for k, v in final.values_.items() if k in self._free_names(params, rest)}
+                try:
+                    without = self._calibrate(m, params, rest, "std", None, init, (), exp, None, None, 0, True)
+                except KilnctlError:  # the structure without e cannot be run at these values: e stays
+                    continue
+                r = self._evidence(m, e, final, without, scales, train, test, exp, 0.0)
+                trials.append((e, rest, init, r))
+            weak = [tr for tr in trials if not tr[3].delta_bic < -self.min_delta_bic]
+            if not weak:
+                break
+            e, rest, init, r = max(weak, key=lambda tr: tr[3].delta_bic)
+            try:
+                refit = self._calibrate(m, params, rest, "std", None, init, (), exp, None, None, 1, True)
+            except KilnctlError:
+                break
+            r.supported = False
+            r.reason = (f"removed in the final check: at the final fit's values the model without it fits the "
+                        f"whole record as well (dBIC of keeping it {r.delta_bic:+.1f}, not below "
+                        f"{-self.min_delta_bic:g}); the rounds credited it with a better fit of the other "
+                        f"parameters, which the final fit found without it")
+            dropped.append(r)
+            say(f"removed {e} in the final check: at the final values it changes the fit by dBIC "
+                f"{r.delta_bic:+.1f} only")
+            selected, final = list(rest), refit
+        return selected, final, dropped
 
     def _settings(self) -> "Diagnosis":
         """A copy with the settings only, sent to worker processes (a fitted Diagnosis carries its results)."""

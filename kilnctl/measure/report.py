@@ -604,8 +604,9 @@ def diagnosis_summary(d) -> str:
         lines += [x for r in rnd for x in _summary_rows(r, *candidate_verdict(d, i, r))]
     removed = getattr(d, "removed_", None) or []
     if removed:
-        lines += _wrap("backward check: effects removed, each judged as if added to the model without it (the "
-                       "dBICs of keeping it)", "  ")
+        lines += _wrap("effects added, then removed (by the backward check on the fitting part, or the final "
+                       "check on the whole record), each judged as if added to the model without it (the dBICs of "
+                       "keeping it)", "  ")
         lines.append(head)
         lines += [x for r in removed for x in _summary_rows(r, "removed", r.reason)]
     lines += _wrap(f"selected: {', '.join(d.selected_) or 'nothing'}", "  ")
@@ -614,7 +615,8 @@ def diagnosis_summary(d) -> str:
     if fs and fs["n_local_fits"]:
         lines += _wrap(f"final refit: the best of {fs['n_local_fits']} local fits from {fs['n_starts']} starting "
                        "points; their current fits " + ", ".join(f"{v:.1f}" for v in fs["fit_current_percent"])
-                       + " %", "  ")
+                       + " %" + ("; then without " + ", ".join(fs["then_removed"]) + " (final check), refitted from "
+                                 "there" if fs.get("then_removed") else ""), "  ")
     lines += _wrap(diagnosis_headline(d), "  ")
     if d.unexplained_:
         lines += _wrap("unexplained residual: " + d.unexplained_["text"], "  ", 4)
@@ -1056,8 +1058,9 @@ def diagnosis_html(d, figs=None) -> str:
         parts.append(table(header, rows, left=1, selected=sel, wrap=(5, 6)))
     removed = getattr(d, "removed_", None) or []
     if removed:
-        parts.append("<h3>Backward check: effects removed</h3><p>Each judged as if added to the model without it "
-                     "(the dBICs of keeping it).</p>")
+        parts.append("<h3>Effects added, then removed</h3><p>By the backward check on the fitting part, or the "
+                     "final check on the whole record; each judged as if added to the model without it (the dBICs "
+                     "of keeping it).</p>")
         parts.append(table(header, [_candidate_row(r, "removed", r.reason) for r in removed], left=1,
                            wrap=(5, 6)))
     # the whole account once, a sentence a paragraph; the warning at the top names what it suggests
