@@ -786,11 +786,7 @@ class Diagnosis:
             # stick-slip already in the model: its friction (mu_c, mu_s) may sit in a valley that only made up
             # for the missing effect, and a valley of the pair lies elsewhere in both.  The effect's own starts
             # (a few, evenly chosen) each with a coarse grid of the friction
-            own = eff.usual_starts() + list(eff.starts(p, m))
-            own = [own[i] for i in np.unique(np.linspace(0, len(own) - 1, PAIRED_STARTS).round().astype(int))] \
-                if own else [{}]
-            effect_starts = effect_starts + [dict(f, **g) for f in _torque_law_starts(init.get("mu_c", p.mu_c))[::3]
-                                             for g in own]
+            effect_starts = effect_starts + _with_friction(_torque_law_starts(init.get("mu_c", p.mu_c)), eff, p, m)
         n_local = None
         rugged = self._rugged(effects)
         if rugged:
@@ -836,13 +832,7 @@ class Diagnosis:
         their spread; its end is polished (one local fit) under ``scales``, the weights of every refit."""
         name = effects[-1]
         law = _torque_law_starts(setup_base["mu_c"])
-        if name == PAIRED:
-            starts = [dict(f) for f in law[::2]]
-        else:
-            own = eff.usual_starts() + list(eff.starts(p, m))
-            own = [own[i] for i in np.unique(np.linspace(0, len(own) - 1, PAIRED_STARTS).round().astype(int))] \
-                if own else [{}]
-            starts = [dict(f, **g) for f in law[::3] for g in own]
+        starts = [dict(f) for f in law[::2]] if name == PAIRED else _with_friction(law, eff, p, m)
         try:
             # the search weighs each channel by its spread: by the base model's residual (how structures are
             # compared) a speed fitted to half an rpm rules the phase-free stage, and the valley was missed
@@ -859,8 +849,9 @@ class Diagnosis:
     def _refit_at_frequency(self, m, params, effects, built, init, effect_starts, oscillation, scales, train, exp,
                             first_failure):
         """A refit of ``effects`` (the last one with one parameter; ``built``: their model, components and
-        parameters from :meth:`_structure`) from where the model oscillates at the record's frequency (:func:`~kilnctl.measure.oscillation.matching_value` over the values of
-        ``effect_starts``), or None when the effect has more parameters, no value matches or the fit fails.
+        parameters from :meth:`_structure`) from where the model oscillates at the record's frequency
+        (:func:`~kilnctl.measure.oscillation.matching_value` over the values of ``effect_starts``), or None
+        when the effect has more parameters, no value matches or the fit fails.
 
         The cycle's phase over the record lies in a valley a few hundredths of the matched value wide (a 30 ms
         lag: about 1 ms) and depends on where the cycle begins, which the kiln's inertia sets (the speed's
@@ -1235,6 +1226,15 @@ def _search_summary(cal: Calibration) -> dict:
     return {"n_starts": int(getattr(cal, "n_starts_", 1)), "n_local_fits": len(fits),
             "costs": [float(c) for c in costs], "fit_current_percent": sorted((float(c) for c in cur), reverse=True),
             "kept_cost": float(cal.cost_)}
+
+
+def _with_friction(law: list, eff, p, m) -> list[dict]:
+    """A few of the effect's own starts (:data:`PAIRED_STARTS`, evenly chosen), each with every third point
+    of the friction grid ``law``."""
+    own = eff.usual_starts() + list(eff.starts(p, m))
+    own = [own[i] for i in np.unique(np.linspace(0, len(own) - 1, PAIRED_STARTS).round().astype(int))] \
+        if own else [{}]
+    return [dict(f, **g) for f in law[::3] for g in own]
 
 
 def _far(values: dict, setup: dict) -> bool:
