@@ -294,6 +294,11 @@ class Diagnosis:
             free += [fp for fp in CATALOGUE[e].parameters if fp.name not in have]
         return model, comps, p, free
 
+    def _setup_far(self, params, current) -> bool:
+        """True when the current model's calibrated friction lies far from the setup's (see :func:`_far`)."""
+        setup = {k: float(params[k]) for k in self.calibrate}
+        return "mu_c" in setup and _far(current.values_, setup)
+
     def _free_names(self, params, effects) -> set:
         """Names of the parameters calibrated with base + effects."""
         _, _, _, free = self._structure(params, effects)
@@ -449,6 +454,14 @@ class Diagnosis:
                       if r.calibration is not None}
             results = self._try_all(m, params, selected, names, current, scales, train, test, exp, pool, say,
                                     before)
+            if not any(r.supported for r in results) and self._rugged(tuple(selected)) \
+                    and self._setup_far(params, current):
+                # stick-slip in the model, nothing supported, and base values that may have made up for what is
+                # missing (a soft drive train): the candidates searched again from the setup's values too
+                say("  nothing is supported, and the model's base values lie far from the setup's: the candidates "
+                    "searched again from the setup's values")
+                results = self._try_all(m, params, selected, names, current, scales, train, test, exp, pool, say,
+                                        before, from_setup=True)
             results.sort(key=_rank)
             anchored, results = self._reanchor(m, params, selected, current, results, scales, train, test, exp, say)
             n_fit = sum(anchored.n_.values())
@@ -557,6 +570,11 @@ class Diagnosis:
         others = [n for n in names if n != PAIRED]
         results = self._try_all(m, params, list(selected) + [PAIRED], others, current, scales, train, test, exp,
                                 pool, say, {})
+        if not any(r.supported for r in results) and self._setup_far(params, current):
+            say("  no pair is supported, and the model's base values lie far from the setup's: the pairs searched "
+                "again from the setup's values")
+            results = self._try_all(m, params, list(selected) + [PAIRED], others, current, scales, train, test,
+                                    exp, pool, say, {}, from_setup=True)
         for r in results:
             r.effect = f"{PAIRED}+{r.effect}"
             r.reason = f"together with {PAIRED} (refitted as a pair): {r.reason}"
@@ -753,8 +771,11 @@ class Diagnosis:
         return rec
 
     def _refit(self, m, params, selected, name, current_values, first_failure, scales, train, exp, before=None,
-               oscillation=None):
+               oscillation=None, from_setup=False):
         """Refit base + ``selected`` + ``name`` on the fitting part (in a worker process when workers > 1).
+
+        ``from_setup``: a structure with stick-slip is also searched from the setup's base values when the
+        current model's lie far from them (:meth:`_refit_from_setup`), and the lower cost is kept.
 
         ``oscillation``: the record's oscillation after the ramp, when the current model lacks it.  For an
         effect with one parameter, a second refit then starts where the model oscillates at the record's
@@ -807,7 +828,7 @@ class Diagnosis:
                                   first_failure=first_failure, new_effect=name, n_local=n_local)
         except KilnctlError as exc:
             return None, f"could not be fitted: {exc}", time.perf_counter() - t_start
-        if rugged and "mu_c" in setup_base and _far(init, setup_base):
+        if from_setup and rugged and "mu_c" in setup_base and _far(init, setup_base):
             again = self._refit_from_setup(m, params, effects, eff, p, init, setup_base, scales, train, exp,
                                            first_failure, n_local)
             if again is not None and again.cost_ < cal.cost_:
@@ -887,14 +908,16 @@ class Diagnosis:
         except KilnctlError:
             return None
 
-    def _try_all(self, m, params, selected, names, current, scales, train, test, exp, pool, say, before):
+    def _try_all(self, m, params, selected, names, current, scales, train, test, exp, pool, say, before,
+                 from_setup=False):
         """Refit every candidate of a round (in parallel when a pool is given) and judge each one.
 
-        ``before``: each candidate's fitted values in the round before (name -> values), or empty."""
+        ``before``: each candidate's fitted values in the round before (name -> values), or empty;
+        ``from_setup``: see :meth:`_refit`."""
         ff = self._first_failure(m, current, exp)
         osc = self._missing_oscillation(m, current, exp)
         args = [(m, params, tuple(selected), name, dict(current.values_), ff, scales, train, exp, before.get(name),
-                 osc) for name in names]
+                 osc, from_setup) for name in names]
         if pool is not None and len(names) > 1:
             # slowest first (the micro model, stick-slip), so that two workers finish together
             order = sorted(range(len(names)), key=lambda i: -_COST_RANK.get(names[i], 1))
