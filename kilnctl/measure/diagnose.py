@@ -295,7 +295,8 @@ class Diagnosis:
         return model, comps, p, free
 
     def _setup_far(self, params, current) -> bool:
-        """True when the current model's calibrated friction lies far from the setup's (see :func:`_far`)."""
+        """True when one of the current model's calibrated base values lies far from the setup's (see
+        :func:`_far`)."""
         setup = {k: float(params[k]) for k in self.calibrate}
         return "mu_c" in setup and _far(current.values_, setup)
 
@@ -674,8 +675,8 @@ class Diagnosis:
             r.supported = False
             r.reason = (f"removed in the final check: at the final fit's values the model without it fits the "
                         f"whole record as well (dBIC of keeping it {r.delta_bic:+.1f}, not below "
-                        f"{-self.min_delta_bic:g}); the rounds credited it with a better fit of the other "
-                        f"parameters, which the final fit found without it")
+                        f"{-self.min_delta_bic:g}); its gain in the rounds came from a better fit of the other "
+                        f"parameters")
             dropped.append(r)
             say(f"removed {e} in the final check: at the final values it changes the fit by dBIC "
                 f"{r.delta_bic:+.1f} only")
