@@ -605,7 +605,8 @@ class Diagnosis:
             args = []
             for e in selected:
                 rest = tuple(x for x in selected if x != e)
-                init = {k: v for k, v in current.values_.items() if k in self._free_names(params, rest)}
+                names = self._free_names(params, rest)
+                init = {k: v for k, v in current.values_.items() if k in names}
                 args.append((m, params, rest, scales, train, init, (), exp, ff))
             cals = self._run_calibrations(args, pool)
             trials = []
@@ -657,7 +658,8 @@ class Diagnosis:
             trials = []
             for e in selected:
                 rest = tuple(x for x in selected if x != e)
-                init = {k: v for k, v in final.values_.items() if k in self._free_names(params, rest)}
+                names = self._free_names(params, rest)
+                init = {k: v for k, v in final.values_.items() if k in names}
                 try:
                     without = self._calibrate(m, params, rest, "std", None, init, (), exp, None, None, 0, True)
                 except KilnctlError:  # the structure without e cannot be run at these values: e stays
