@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -975,8 +975,7 @@ class Calibration:
         costs = [search.trial(u).cost for u in u0s] if len(u0s) > 1 else [0.0]
         wide = search.cycles_from is not None and starts.n_local > 0 and space.coords and screen > 1
         firsts = [] if starts.n_local == 0 else \
-            starts.choose(u0s, costs) if not wide else Starts(starts.points, screen * starts.n_local,
-                                                                starts.separation).choose(u0s, costs)
+            (replace(starts, n_local=screen * starts.n_local) if wide else starts).choose(u0s, costs)
         prob.cycles_from = None
         search.cache.clear()
         if wide:

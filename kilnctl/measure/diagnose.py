@@ -455,14 +455,9 @@ class Diagnosis:
                       if r.calibration is not None}
             results = self._try_all(m, params, selected, names, current, scales, train, test, exp, pool, say,
                                     before)
-            if not any(r.supported for r in results) and self._rugged(tuple(selected)) \
-                    and self._setup_far(params, current):
-                # stick-slip in the model, nothing supported, and base values that may have made up for what is
-                # missing (a soft drive train): the candidates searched again from the setup's values too
-                say("  nothing is supported, and the model's base values lie far from the setup's: the candidates "
-                    "searched again from the setup's values")
-                results = self._try_all(m, params, selected, names, current, scales, train, test, exp, pool, say,
-                                        before, from_setup=True)
+            if self._rugged(tuple(selected)):
+                results = self._again_from_setup(m, params, selected, names, current, scales, train, test, exp,
+                                                 pool, say, results)
             results.sort(key=_rank)
             anchored, results = self._reanchor(m, params, selected, current, results, scales, train, test, exp, say)
             n_fit = sum(anchored.n_.values())
@@ -563,6 +558,22 @@ class Diagnosis:
         return breakaways(t, current.run_.outputs["current_A"], t_from=exp.steady_from,
                           threshold=rec.threshold).size < rec.size / 2
 
+    def _again_from_setup(self, m, params, selected, names, current, scales, train, test, exp, pool, say,
+                          results) -> list:
+        """The second pass of a round whose structure has stick-slip (``selected``): when none of its
+        ``results`` (in the order of ``names``) is supported and the current model's base values lie far from
+        the setup's, each candidate is searched from the setup's values (:meth:`_refit_from_setup`), and
+        where that search ends with the lower cost its result replaces the round's.  The base values may have
+        made up for what is missing (a soft drive train), and the regular refits start about them."""
+        if any(r.supported for r in results) or not self._setup_far(params, current):
+            return results
+        say("  nothing is supported, and the model's base values lie far from the setup's: each candidate "
+            "searched again from the setup's values")
+        again = self._try_all(m, params, selected, names, current, scales, train, test, exp, pool, say, {},
+                              from_setup=True)
+        return [a if a.calibration is not None and (r.calibration is None or a.calibration.cost_ <
+                                                    r.calibration.cost_) else r for r, a in zip(results, again)]
+
     def _try_pairs(self, m, params, selected, names, current, scales, train, test, exp, pool, say) -> list:
         """The torque friction law (:data:`PAIRED`) refitted together with each other candidate, each pair
         judged against the current model like one candidate (its result named ``law+effect``)."""
@@ -571,11 +582,8 @@ class Diagnosis:
         others = [n for n in names if n != PAIRED]
         results = self._try_all(m, params, list(selected) + [PAIRED], others, current, scales, train, test, exp,
                                 pool, say, {})
-        if not any(r.supported for r in results) and self._setup_far(params, current):
-            say("  no pair is supported, and the model's base values lie far from the setup's: the pairs searched "
-                "again from the setup's values")
-            results = self._try_all(m, params, list(selected) + [PAIRED], others, current, scales, train, test,
-                                    exp, pool, say, {}, from_setup=True)
+        results = self._again_from_setup(m, params, list(selected) + [PAIRED], others, current, scales, train,
+                                         test, exp, pool, say, results)
         for r in results:
             r.effect = f"{PAIRED}+{r.effect}"
             r.reason = f"together with {PAIRED} (refitted as a pair): {r.reason}"
@@ -777,8 +785,9 @@ class Diagnosis:
                oscillation=None, from_setup=False):
         """Refit base + ``selected`` + ``name`` on the fitting part (in a worker process when workers > 1).
 
-        ``from_setup``: a structure with stick-slip is also searched from the setup's base values when the
-        current model's lie far from them (:meth:`_refit_from_setup`), and the lower cost is kept.
+        ``from_setup``: instead, only the search of a structure with stick-slip from the setup's base values
+        when the current model's lie far from them (:meth:`_refit_from_setup`; the second pass of
+        :meth:`_again_from_setup`).
 
         ``oscillation``: the record's oscillation after the ramp, when the current model lacks it.  For an
         effect with one parameter, a second refit then starts where the model oscillates at the record's
@@ -826,16 +835,17 @@ class Diagnosis:
         if any(abs(setup_base[k] - init[k]) > 1e-9 * abs(init[k]) for k in setup_base):
             # every second grid point again with the setup's base values
             starts += [dict(setup_base, **g) for g in (effect_starts or [{}])[::2]]
+        if from_setup:
+            cal = self._refit_from_setup(m, params, effects, eff, p, init, setup_base, scales, train, exp,
+                                         first_failure, n_local) \
+                if rugged and "mu_c" in setup_base and _far(init, setup_base) else None
+            return cal, None if cal is not None else "not searched from the setup's values", \
+                time.perf_counter() - t_start
         try:
             cal = self._calibrate(m, params, effects, scales, train, init, starts, experiment=exp,
                                   first_failure=first_failure, new_effect=name, n_local=n_local)
         except KilnctlError as exc:
             return None, f"could not be fitted: {exc}", time.perf_counter() - t_start
-        if from_setup and rugged and "mu_c" in setup_base and _far(init, setup_base):
-            again = self._refit_from_setup(m, params, effects, eff, p, init, setup_base, scales, train, exp,
-                                           first_failure, n_local)
-            if again is not None and again.cost_ < cal.cost_:
-                cal = again
         if oscillation is not None:
             matched = self._refit_at_frequency(m, params, effects, (model, comps, p), init, effect_starts,
                                                oscillation, scales, train, exp, first_failure)
