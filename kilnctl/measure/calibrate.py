@@ -317,8 +317,9 @@ class _Problem:
         """A residual that does not depend on the phase of self-sustained cycles after ``cycles_from``.
 
         Before ``cycles_from`` (the ramp and the first breakaway) the scaled residual itself, smoothed like the
-        plain residual when a smoothing width is set (:meth:`set_smoothing`); after it, per channel, the difference of the mean levels and of the autocovariances at lags from
-        :data:`CYCLE_LAGS_S` (model minus measurement, over the fitted samples).  Stick-slip cycles whose period
+        plain residual when a smoothing width is set (:meth:`set_smoothing`); after it, per channel, the
+        difference of the mean levels and of the autocovariances at lags from :data:`CYCLE_LAGS_S` (model
+        minus measurement, over the fitted samples).  Stick-slip cycles whose period
         is slightly wrong drift out of phase, so that the simulation-error cost of a long record has a valley
         for every whole number of cycles; their mean level, period and amplitude -- which is what the
         autocovariance holds -- change smoothly with the friction and the burden's inertia.  Lags below the
@@ -931,7 +932,9 @@ class Calibration:
             stick-slip): when their period is slightly off they drift out
             of phase, and the simulation-error cost has a valley for every
             whole number of cycles; their period, amplitude and level
-            change smoothly with the parameters.  Then a timing stage on
+            change smoothly with the parameters.  The starting points are
+            compared on this residual, its ramp part smoothed by the first
+            ``smoothing`` width.  Then a timing stage on
             the whole record: the current's samples around the record's
             stick-slip falls replaced by the time errors of the model's
             burden switches (:class:`~kilnctl.measure.breakaways.BreakawayTiming`;
