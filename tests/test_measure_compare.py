@@ -137,6 +137,24 @@ def test_compare_of_the_true_model_leaves_white_residuals():
         assert not ch.failing
 
 
+@pytest.mark.parametrize("channel, factor", [("current_A", 1 / 16.0), ("speed_rpm", 0.2)])
+def test_a_column_in_other_units_gets_a_caution_that_names_the_factor(channel, factor):
+    # truth: the record of the model itself, one column then logged in other units (a current in per cent of a
+    # 1600 A rating; a speed in per cent of a rated 500 rpm), so the model spans 1/factor times the
+    # record.  (kA, a speed in rad/s or at the kiln shell: refused when the record is read.)
+    m = _record(GIVEN, effects=("second_motor",))
+    assert compare(m, GIVEN).cautions == []  # an effect missing from the model is not a unit slip
+    cur = m.current * factor if channel == "current_A" else m.current
+    spd = m.speed * factor if channel == "speed_rpm" else m.speed
+    c = compare(Measurement.from_arrays(m.t, cur, spd, m.speed_ref), GIVEN)
+    assert len(c.cautions) == 1 and c.cautions[0].startswith(f"{channel}: fit ")
+    spans = float(c.cautions[0].split("signal spans ")[1].split(" times")[0])
+    assert spans == pytest.approx(1 / factor, rel=0.15)
+    assert "unit" in c.cautions[0]
+    assert c.to_dict()["cautions"] == c.cautions
+    assert any(line.startswith("  caution: ") for line in c.summary_lines())
+
+
 def test_compare_cli_json(tmp_path, capsys):
     from kilnctl.cli import compare_cmd
 

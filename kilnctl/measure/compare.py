@@ -27,6 +27,14 @@ __all__ = ["Comparison", "ChannelComparison", "compare", "compare_run"]
 MAX_LAG_S = 5.0
 
 
+#: ratios of the model's to the record's signal spread that, with a fit below 0 %, are read as a unit or setup
+#: mismatch (:attr:`ChannelComparison.level_caution`): the model spanning more than 4 times the record (a
+#: current in per cent of a rating above 400 A, a speed in rad/s read as rpm: 9.5, at the kiln shell: the gear
+#: ratio) or less than a tenth of it.  Effects add variation to a record far more easily than they take it
+#: away: the hard set's hunting records span 3.7 times the setup's model (fit 5 %)
+SPREAD_RATIO = (0.1, 4.0)
+
+
 @dataclass
 class ChannelComparison:
     """Measured and model signal of one channel and the tests of their residual.
@@ -72,10 +80,39 @@ class ChannelComparison:
     spectrum: dict
     failing: list
 
+    @property
+    def level_caution(self) -> str | None:
+        """A caution when the model explains less of the channel than the record's own mean (fit below 0 %)
+        and the ratio of the two signals' spreads lies outside :data:`SPREAD_RATIO`; None otherwise.
+
+        That is a column in other units (a current in per cent of its rating, a speed at the kiln shell or
+        in rad/s read as rpm: factors of 10 to 100) or a setup for another drive, which no effect of the
+        catalogue explains.  The spread is the range of the middle 98 % of the samples: a few impacts'
+        spikes do not set it."""
+        if not self.fit < 0.0:
+            return None
+
+        def spread(x):
+            x = x[np.isfinite(x)]
+            return float(np.percentile(x, 99) - np.percentile(x, 1)) if x.size else math.nan
+
+        rec, mod = spread(self.measured), spread(self.model)
+        ratio = mod / rec if rec > 0 else math.inf
+        if SPREAD_RATIO[0] <= ratio <= SPREAD_RATIO[1]:
+            return None
+        size = (f"the model's signal spans {ratio:.3g} times the record's (1 % to 99 % of the samples)"
+                if math.isfinite(ratio) else "the record's signal does not vary")
+        return (f"{self.name}: fit {self.fit:.0f} %, less than the record's own mean explains (record "
+                f"{np.nanmean(self.measured):.4g} {self.unit} on average, model {np.nanmean(self.model):.4g} "
+                f"{self.unit}), and {size}. Check the column's unit (A and rpm at the motor; a current in per "
+                f"cent of the rating, a speed at the kiln shell or in rad/s read as rpm) and that the setup is "
+                f"this drive's (ratings, gear ratio, reference): no effect explains a difference of this size.")
+
     def to_dict(self) -> dict:
         """Return the statistics (not the signals) as a JSON-ready dictionary."""
         return {
             "fit_percent": _num(self.fit), "bias": self.bias, "rms": self.rms, "sigma_robust": self.sigma,
+            "level_caution": self.level_caution,
             "unit": self.unit,
             "whiteness": {"n_lags": int(self.whiteness["lags"][-1]), "band": self.whiteness["band"],
                           "n_outside": self.whiteness["n_outside"],
@@ -137,6 +174,11 @@ class Comparison:
         return {k: c.fit for k, c in self.channels.items()}
 
     @property
+    def cautions(self) -> list:
+        """The channels' :attr:`ChannelComparison.level_caution` texts (a fit below 0 %: units or setup)."""
+        return [c.level_caution for c in self.channels.values() if c.level_caution is not None]
+
+    @property
     def failing(self) -> list:
         """Failing intervals of every channel, in time order (dicts with ``channel``)."""
         out = [dict(f, channel=k) for k, c in self.channels.items() for f in c.failing]
@@ -150,7 +192,8 @@ class Comparison:
         dict
             ``source``, ``model``, ``effects``, ``experiment``, ``fit_percent``
             per channel, ``channels`` (statistics per channel), ``failing``
-            (all intervals in time order, with their text), ``phases``.
+            (all intervals in time order, with their text), ``cautions``
+            (:attr:`cautions`), ``phases``.
         """
         return {
             "source": self.source, "model": self.model, "effects": list(self.effects),
@@ -158,6 +201,7 @@ class Comparison:
             "fit_percent": {k: _num(v) for k, v in self.fit.items()},
             "channels": {k: c.to_dict() for k, c in self.channels.items()},
             "failing": self.failing,
+            "cautions": self.cautions,
             "phases": self.phases,
         }
 
@@ -175,6 +219,7 @@ class Comparison:
             lines += [f"    {f['channel']}: {f['text']}" for f in fails]
         else:
             lines.append("  no interval with |residual| > 3 sigma")
+        lines += [f"  caution: {text}" for text in self.cautions]
         for note in self.experiment.notes:
             lines.append(f"  note: {note}")
         return lines

@@ -210,7 +210,12 @@ class Diagnosis:
         Warnings about selected effects: a kiln unbalance found in a record
         shorter than a kiln revolution (there it is a slow drift, like a
         sensor offset), or evidence that is weak once the residual's
-        autocorrelation is allowed for.
+        autocorrelation is allowed for; first the setup cautions.
+    setup_cautions_ : list of str
+        The setup's own model, before calibration, explains less of a
+        channel than the record's mean does (a fit below 0 %): a column in
+        other units or a setup for another drive (see
+        :attr:`~kilnctl.measure.compare.ChannelComparison.level_caution`).
     scales_ : dict
         Residual scale per channel that weights the structures' comparison [unit of the channel].
     train_, test_ : ndarray of bool
@@ -413,6 +418,9 @@ class Diagnosis:
         else:
             base = base_cal.fit(m, experiment=exp, n_local=self.n_local + 1)
         say(f"baseline: {_fmt_fit(base.fit_percent_)} ({base.nfev_} runs)")
+        self.setup_cautions_ = self._setup_cautions(m, params, exp)
+        for text in self.setup_cautions_:
+            say(f"caution: {text}")
         # residual scales for the comparison of structures: the base's residual RMS per channel
         # (each channel weighted by its own error level, as the BIC's likelihood does)
         active = m.t >= exp.t0 - 1e-9
@@ -531,7 +539,7 @@ class Diagnosis:
             self.unexplained_ = dict(self.signature_, structured=True, hint=self.abrupt_["text"],
                                      abrupt_change={k: v for k, v in self.abrupt_.items() if k != "text"},
                                      text=f"{self.abrupt_['text']}. {self.signature_['text']}")
-        self.caveats_ = self._caveats(m, exp, params)
+        self.caveats_ = list(self.setup_cautions_) + self._caveats(m, exp, params)
         self.standstill_ = standstill_offsets(m, exp)
         if self.standstill_:
             text = "; ".join(o["text"] for o in self.standstill_)
@@ -718,6 +726,20 @@ class Diagnosis:
             except KilnctlError:
                 outs.append(None)
         return outs
+
+    def _setup_cautions(self, m, params, exp) -> list[str]:
+        """Cautions when the setup's own model, before any calibration, explains less of a channel than the
+        record's mean (:attr:`~kilnctl.measure.compare.ChannelComparison.level_caution`): a unit or setup
+        mismatch, which the calibration papers over with implausible values and effects then stand in for (a
+        current logged in per cent of its rating: the base calibrated to a fit of 0.3 %, then a kiln unbalance
+        of 4.4e5 N m was selected)."""
+        try:
+            run = run_model(params, m, exp, model=self.model)
+        except KilnctlError:
+            return []
+        cmp = compare_run(m, run, exp, model=self.model, params=params)
+        return [f"the setup's model before calibration, {text[0].lower()}{text[1:]} Until that is resolved, the diagnosis "
+                f"below is not evidence of an effect." for text in cmp.cautions]
 
     def _caveats(self, m, exp, params) -> list[str]:
         """Warnings about selected effects whose evidence is weaker than the criteria suggest."""

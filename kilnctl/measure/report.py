@@ -1159,6 +1159,7 @@ def comparison_html(c, fig=None) -> str:
              "<h2>Measured and model</h2>" + figure_block(fig, "measured vs model"),
              "<h2>Where it fails</h2>" + _failing_table(fails)]
     return report_page(f"{record_name_of(c.source)} against the {model}", head, parts,
+                       warnings=[("Caution", text) for text in c.cautions],
                        terms=("fit", "sigma", "whiteness"), notes=c.experiment.notes,
                        settings={"model": c.model, "effects": list(c.effects), "record": record_name_of(c.source)})
 
