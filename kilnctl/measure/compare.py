@@ -21,18 +21,59 @@ from .io import Experiment, Measurement
 from .runner import CHANNELS, ModelRun, kiln_angle, run_model
 from .stats import autocorr, crosscorr, failing_intervals, fit_percent, residual_spectrum, robust_sigma
 
-__all__ = ["Comparison", "ChannelComparison", "compare", "compare_run"]
+__all__ = ["Comparison", "ChannelComparison", "compare", "compare_run", "level_caution"]
 
 #: default largest correlation lag [s]
 MAX_LAG_S = 5.0
 
 
 #: ratios of the model's to the record's signal spread that, with a fit below 0 %, are read as a unit or setup
-#: mismatch (:attr:`ChannelComparison.level_caution`): the model spanning more than 4 times the record (a
+#: mismatch (:func:`level_caution`): the model spanning more than 4 times the record (a
 #: current in per cent of a rating above 400 A, a speed in rad/s read as rpm: 9.5, at the kiln shell: the gear
 #: ratio) or less than a tenth of it.  Effects add variation to a record far more easily than they take it
 #: away: the hard set's hunting records span 3.7 times the setup's model (fit 5 %)
 SPREAD_RATIO = (0.1, 4.0)
+
+
+def level_caution(name: str, unit: str, measured, model) -> str | None:
+    """A caution when a model explains less of a channel than the record's own mean (fit below 0 %) and the
+    ratio of the two signals' spreads lies outside :data:`SPREAD_RATIO`; None otherwise.
+
+    That is a column in other units (a current in per cent of its rating, a speed at the kiln shell or in
+    rad/s read as rpm: factors of 10 to 100) or a setup for another drive, which no effect of the catalogue
+    explains.  The spread is the range of the middle 98 % of the samples: a few impacts' spikes do not set it.
+
+    Parameters
+    ----------
+    name, unit : str
+        Column name and unit.
+    measured, model : array_like
+        The record's and the model's signal at the compared samples [unit].
+
+    Returns
+    -------
+    str or None
+    """
+    measured, model = np.asarray(measured, float), np.asarray(model, float)
+    fit = fit_percent(measured, model)
+    if not fit < 0.0:
+        return None
+
+    def spread(x):
+        x = x[np.isfinite(x)]
+        return float(np.percentile(x, 99) - np.percentile(x, 1)) if x.size else math.nan
+
+    rec, mod = spread(measured), spread(model)
+    ratio = mod / rec if rec > 0 else math.inf
+    if SPREAD_RATIO[0] <= ratio <= SPREAD_RATIO[1]:
+        return None
+    size = (f"the model's signal spans {ratio:.3g} times the record's (1 % to 99 % of the samples)"
+            if math.isfinite(ratio) else "the record's signal does not vary")
+    return (f"{name}: fit {fit:.0f} %, less than the record's own mean explains (record "
+            f"{np.nanmean(measured):.4g} {unit} on average, model {np.nanmean(model):.4g} {unit}), and {size}. "
+            f"Check the column's unit (A and rpm at the motor; a current in per cent of the rating, a speed at "
+            f"the kiln shell or in rad/s read as rpm) and that the setup is this drive's (ratings, gear ratio, "
+            f"reference): no effect explains a difference of this size.")
 
 
 @dataclass
@@ -82,31 +123,8 @@ class ChannelComparison:
 
     @property
     def level_caution(self) -> str | None:
-        """A caution when the model explains less of the channel than the record's own mean (fit below 0 %)
-        and the ratio of the two signals' spreads lies outside :data:`SPREAD_RATIO`; None otherwise.
-
-        That is a column in other units (a current in per cent of its rating, a speed at the kiln shell or
-        in rad/s read as rpm: factors of 10 to 100) or a setup for another drive, which no effect of the
-        catalogue explains.  The spread is the range of the middle 98 % of the samples: a few impacts'
-        spikes do not set it."""
-        if not self.fit < 0.0:
-            return None
-
-        def spread(x):
-            x = x[np.isfinite(x)]
-            return float(np.percentile(x, 99) - np.percentile(x, 1)) if x.size else math.nan
-
-        rec, mod = spread(self.measured), spread(self.model)
-        ratio = mod / rec if rec > 0 else math.inf
-        if SPREAD_RATIO[0] <= ratio <= SPREAD_RATIO[1]:
-            return None
-        size = (f"the model's signal spans {ratio:.3g} times the record's (1 % to 99 % of the samples)"
-                if math.isfinite(ratio) else "the record's signal does not vary")
-        return (f"{self.name}: fit {self.fit:.0f} %, less than the record's own mean explains (record "
-                f"{np.nanmean(self.measured):.4g} {self.unit} on average, model {np.nanmean(self.model):.4g} "
-                f"{self.unit}), and {size}. Check the column's unit (A and rpm at the motor; a current in per "
-                f"cent of the rating, a speed at the kiln shell or in rad/s read as rpm) and that the setup is "
-                f"this drive's (ratings, gear ratio, reference): no effect explains a difference of this size.")
+        """:func:`level_caution` of this channel."""
+        return level_caution(self.name, self.unit, self.measured, self.model)
 
     def to_dict(self) -> dict:
         """Return the statistics (not the signals) as a JSON-ready dictionary."""

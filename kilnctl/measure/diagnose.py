@@ -40,7 +40,7 @@ from ..errors import KilnctlError, ModelError, NotFittedError, close_matches_hin
 from ..params import Parameters
 from ..simulate import resolve_gains
 from .calibrate import Calibration, Smoothing, default_starts, holdout_masks
-from .compare import compare_run
+from .compare import compare_run, level_caution
 from .effects import CATALOGUE, DEFAULT_CALIBRATE, effect_components, grid_starts
 from .breakaways import breakaways
 from .io import Measurement
@@ -737,9 +737,10 @@ class Diagnosis:
             run = run_model(params, m, exp, model=self.model)
         except KilnctlError:
             return []
-        cmp = compare_run(m, run, exp, model=self.model, params=params)
-        return [f"the setup's model before calibration, {text[0].lower()}{text[1:]} Until that is resolved, the diagnosis "
-                f"below is not evidence of an effect." for text in cmp.cautions]
+        active = m.t >= exp.t0 - 1e-9
+        texts = [level_caution(c, unit, m.channels[c][active], run.outputs[c]) for c, (_, unit) in CHANNELS.items()]
+        return [f"the setup's model before calibration, {text} Until that is resolved, the diagnosis below is not "
+                f"evidence of an effect." for text in texts if text is not None]
 
     def _caveats(self, m, exp, params) -> list[str]:
         """Warnings about selected effects whose evidence is weaker than the criteria suggest."""
