@@ -969,6 +969,9 @@ class Diagnosis:
             else:
                 r = self._evidence(m, name, cal, current, scales, train, test, exp, wall)
             results.append(r)
+            if cal is None:  # not fitted (or, in the second pass, not searched from the setup's values)
+                say(f"  {name:<22} {error}")
+                continue
             say(f"  {name:<22} dBIC {r.delta_bic:+10.1f} (whitened {r.delta_bic_corrected:+8.1f})  held-out gain "
                 f"{r.holdout_gain:+6.1f} % (z {r.holdout_z:+5.1f})  "
                 f"{'supported' if r.supported else '-'}")
