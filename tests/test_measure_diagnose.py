@@ -471,6 +471,7 @@ def test_final_check_removes_an_effect_left_at_its_null_value(second_motor_case)
     assert selected == ["second_motor"]
     assert [r.effect for r in dropped] == ["viscous_drag"] and not dropped[0].supported
     assert "final check" in dropped[0].reason and dropped[0].delta_bic > -d.min_delta_bic
+    assert dropped[0].to_dict()["holdout_gain_percent"] is None  # the final fit held nothing out
     start = {k: v for k, v in init.items() if k != "B_o"}
     without = d._calibrate(m, params, ("second_motor",), "std", None, start, (), exp, None, None, 0, True)
     assert "B_o" not in final.values_ and final.cost_ <= without.cost_

@@ -691,6 +691,8 @@ class Diagnosis:
             except KilnctlError:
                 break
             r.supported = False
+            # the final fit saw the whole record: no part of it is held out (the tables print "-")
+            r.holdout_gain = r.holdout_z = math.nan
             r.reason = (f"removed in the final check: at the final fit's values the model without it fits the "
                         f"whole record as well (dBIC of keeping it {r.delta_bic:+.1f}, not below "
                         f"{-self.min_delta_bic:g}); its gain in the rounds came from a better fit of the other "
