@@ -49,6 +49,29 @@ def test_effect_refit_from_a_fitted_stick_slip_model_reaches_the_true_structure(
     assert 75.0 < cal.values_["T_cm"] < 125.0
 
 
+def _hard_record(name, effects):
+    """A record of the hard set (benchmarks/diagnose_records.py), the diagnosis' setup and the structure
+    base + ``effects``: (m, truth, params, d, exp, (model, comps, p), the true structure's current fit at the
+    plant's values [%], the fitting part)."""
+    from benchmarks.diagnose_records import find, make
+    from kilnctl import Parameters
+    from kilnctl.measure import compare
+    from kilnctl.measure.calibrate import holdout_masks
+    from kilnctl.measure.diagnose import Diagnosis
+    from kilnctl.measure.synthetic import DEFAULT_GAINS
+    from kilnctl.simulate import resolve_gains
+
+    m, truth = make(find(name))
+    params = resolve_gains(Parameters(DEFAULT_GAINS))
+    d = Diagnosis(params)
+    exp = m.experiment(params)
+    model, comps, p, _ = d._structure(params, effects)
+    true_fit = compare(m, p.replace(**truth["base"], **truth["catalogue_values"]), model=model,
+                       effects=comps).fit["current_A"]
+    train, _ = holdout_masks(m, d.holdout, d.holdout_fraction, t0=exp.t0)
+    return m, truth, params, d, exp, (model, comps, p), true_fit, train
+
+
 @pytest.mark.slow  # 120 starting points, six phase-free stages and four local fits of a stick-slip pair (~25 s)
 def test_a_search_from_the_setup_reaches_the_soft_drive_trains_valley():
     # truth: kilnctl's model at the independent plant's own values (benchmarks/diagnose_records.py, "plant"
@@ -59,29 +82,18 @@ def test_a_search_from_the_setup_reaches_the_soft_drive_trains_valley():
     # many as it fits by the phase-free stage (the valley start ranked third; the first two led to 82 % and
     # 76 %), and weighs the channels by their spread: by the base's residual (the speed fitted to 0.5 rpm)
     # the speed's cycles ruled the stage and the valley was missed again (77 %).
-    from benchmarks.diagnose_records import find, make
-    from kilnctl import Parameters
     from kilnctl.measure import compare
-    from kilnctl.measure.calibrate import holdout_masks
-    from kilnctl.measure.diagnose import CHANNELS, Diagnosis
+    from kilnctl.measure.diagnose import CHANNELS
     from kilnctl.measure.effects import CATALOGUE
     from kilnctl.measure.runner import run_model
-    from kilnctl.measure.synthetic import DEFAULT_GAINS
-    from kilnctl.simulate import resolve_gains
 
-    m, truth = make(find("plant:torque_law+compliance/s2"))
-    params = resolve_gains(Parameters(DEFAULT_GAINS))
-    d = Diagnosis(params)
-    exp = m.experiment(params)
     effects = ("torque_friction_law", "drivetrain_compliance")
-    model, comps, p, _ = d._structure(params, effects)
-    true_fit = compare(m, p.replace(**truth["base"], **truth["catalogue_values"]), model=model,
-                       effects=comps).fit["current_A"]
+    m, truth, params, d, exp, (model, comps, p), true_fit, train = _hard_record("plant:torque_law+compliance/s2",
+                                                                                effects)
     base = {"mu_c": 0.4857, "mu_s": 0.6193, "m_v": 5.108e5, "J_v": 1.112e6}  # the base's calibration
     act = m.t >= exp.t0 - 1e-9
     run = run_model(params.replace(**base), m, exp)
     scales = {c: float(np.sqrt(np.mean((m.channels[c][act] - run.outputs[c]) ** 2))) for c in CHANNELS}
-    train, _ = holdout_masks(m, d.holdout, d.holdout_fraction, t0=exp.t0)
     setup = {k: float(params[k]) for k in d.calibrate}
     cal = d._refit_from_setup(m, params, effects, CATALOGUE["drivetrain_compliance"], p, base, setup, scales,
                               train, exp, None, 3)
@@ -101,25 +113,12 @@ def test_backlash_refit_against_a_stick_slip_model_finds_the_gap():
     # either side of it ranked below the gap's null value and the refit ended at 90.2 % (delta_x 4 um), so a
     # heavily damped stiff compliance was selected in its place.  With the ramp part smoothed like the plain
     # residual the grid's neighbours of the gap rank first.
-    from benchmarks.diagnose_records import find, make
-    from kilnctl import Parameters
     from kilnctl.measure import compare
-    from kilnctl.measure.calibrate import holdout_masks
-    from kilnctl.measure.diagnose import Diagnosis
-    from kilnctl.measure.synthetic import DEFAULT_GAINS
-    from kilnctl.simulate import resolve_gains
 
-    m, truth = make(find("pair:torque_friction_law+backlash/s2"))
-    params = resolve_gains(Parameters(DEFAULT_GAINS))
-    d = Diagnosis(params)
-    exp = m.experiment(params)
-    effects = ("torque_friction_law", "backlash")
-    model, comps, p, _ = d._structure(params, effects)
-    true_fit = compare(m, p.replace(**truth["base"], **truth["catalogue_values"]), model=model,
-                       effects=comps).fit["current_A"]
+    m, truth, params, d, exp, (model, comps, p), true_fit, train = _hard_record(
+        "pair:torque_friction_law+backlash/s2", ("torque_friction_law", "backlash"))
     law = {"mu_c": 0.38422, "mu_s": 0.48936, "m_v": 6.03392e5, "J_v": 1.763147e6}  # the torque-law model's fit
     scales = {"current_A": 71.445, "speed_rpm": 0.72759}
-    train, _ = holdout_masks(m, d.holdout, d.holdout_fraction, t0=exp.t0)
     cal, error, _ = d._refit(m, params, ["torque_friction_law"], "backlash", law, None, scales, train, exp)
     assert error is None
     assert true_fit > 97.5
