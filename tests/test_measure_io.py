@@ -222,6 +222,26 @@ def test_current_in_ma_and_speed_in_drive_units_are_refused(tmp_path):
     assert read_csv(_write(tmp_path, _csv(t, i, w, r), "si.csv")).n == 200
 
 
+def test_a_glitch_sample_is_named_as_such_not_as_a_unit(tmp_path):
+    """One or two samples far beyond the unit limit while the rest are a plausible start-up: the logger's glitch.
+
+    Truth: the start-up of the test above in A and rpm with one current sample (line 101) set to 8000 A, then two
+    speed samples (lines 51 and 151) to 9999 rpm; the reader refuses each (kilnctl does not replace values) and
+    names the samples, the largest of the others, and the fix, not a unit.
+    """
+    t, i, w, r = _rows()
+    i2 = i.copy()
+    i2[99] = 8000.0
+    with pytest.raises(DataError, match=r"line 101, column 'current_A': 8000 A, beyond 7500 A, while the other 199 "
+                                        r"samples stay within 119.9 A: an isolated glitch of the logger, not a unit"):
+        read_csv(_write(tmp_path, _csv(t, i2, w, r)))
+    w2 = w.copy()
+    w2[[49, 149]] = 9999.0
+    with pytest.raises(DataError, match=r"line 51, column 'speed_rpm': 9999 rpm \(and 1 more, the last on line 151\)"
+                                        r".*isolated glitches of the logger, not a unit; correct them"):
+        read_csv(_write(tmp_path, _csv(t, i, w2, r), "speed.csv"))
+
+
 def test_timestamps_of_one_second_resolution_give_the_error_and_no_numpy_warning(tmp_path):
     """Timestamps written to the second (a historian's default) repeat within a second: one DataError, no warning.
 

@@ -1003,6 +1003,9 @@ def _check_dead(arrays, source, labels=None):
 
 #: a current above this many times I_max, or a speed above this many times omega_ref, is in another unit
 TOO_LARGE = 5.0
+#: at most this fraction of a channel's samples beyond the unit limits, with the rest within them, are read as
+#: isolated glitches of the logger (and named as such) rather than as a channel in another unit
+GLITCH_FRACTION = 0.01
 #: a record whose speed starts above this fraction of omega_ref does not start at rest
 START_AT_REST_FRACTION = 0.1
 
@@ -1019,6 +1022,22 @@ def _check_starts_at_rest(m, source, labels, params):
                     "compare and diagnose start the model at rest, so a record must begin before the start-up: "
                     "export it from before the speed reference rises, or cut the start-ups out of a longer log with "
                     "kilnctl split-startups")
+
+
+def _glitches(a, limit: float, source, lines, row_word, labels, name, unit: str) -> str | None:
+    """The refusal's text when only a few isolated samples of ``a`` exceed ``limit`` in magnitude
+    (:data:`GLITCH_FRACTION`) and the others stay within it: a logger's glitch, not a unit; else None."""
+    bad = np.flatnonzero(np.abs(a) > limit)
+    if bad.size == 0 or bad.size > GLITCH_FRACTION * a.size:
+        return None
+    rest = float(np.max(np.abs(np.delete(a, bad))))
+    where = _where(source, lines, int(bad[0]), name, row_word, labels)
+    more, what = ("", "an isolated glitch of the logger") if bad.size == 1 else \
+        (f" (and {bad.size - 1} more, the last on {row_word} {int(lines[bad[-1]])})", "isolated glitches of the logger")
+    return (f"{where}: {float(a[bad[0]]):.4g} {unit}{more}, beyond {limit:.4g} {unit}, while the other "
+            f"{a.size - bad.size} samples stay within {rest:.4g} {unit}: {what}, not a unit; correct "
+            f"{'it' if bad.size == 1 else 'them'} (the mean of the neighbours) and read the record again: kilnctl "
+            "does not filter or replace values")
 
 
 def _check_units(arrays, lines, source, params, row_word, labels=None, log=False):
@@ -1042,6 +1061,9 @@ def _check_units(arrays, lines, source, params, row_word, labels=None, log=False
                 f"is {rad:.4g} rad/s); multiply by 60/(2*pi) = 9.549, or write the unit in the header "
                 f"('{name} [rad/s]'){pct}")
         if not log and top > TOO_LARGE * w_ref > 0:
+            glitch = _glitches(a, TOO_LARGE * w_ref, source, lines, row_word, labels, name, "rpm")
+            if glitch:
+                raise DataError(glitch)
             raise DataError(
                 f"{at}: largest value {top:.4g} is {top / w_ref:.0f} x the setup's speed reference {w_ref:g} rpm: not "
                 "a motor speed in rpm (a drive's internal units, 16384 = 100 %? a glitch value?); convert it to rpm, "
@@ -1062,6 +1084,9 @@ def _check_units(arrays, lines, source, params, row_word, labels=None, log=False
     top = float(np.max(np.abs(cur)))
     k = int(np.argmax(np.abs(cur)))
     if not log and top > TOO_LARGE * params.I_max > 0:
+        glitch = _glitches(cur, TOO_LARGE * params.I_max, source, lines, row_word, labels, "current_A", "A")
+        if glitch:
+            raise DataError(glitch)
         raise DataError(
             f"{_where(source, lines, k, 'current_A', row_word, labels)}: largest value {top:.4g} is "
             f"{top / params.I_max:.0f} x the setup's current limit I_max = {params.I_max:g} A: looks like mA or a "
