@@ -450,6 +450,14 @@ def test_backward_check_starts_each_smaller_structure_at_the_current_values():
     base = {k: values[k] for k in ("mu_c", "mu_s", "m_v", "J_v")}
     assert inits[("viscous_drag",)] == dict(base, B_o=8.0)
     assert inits[("drivetrain_compliance",)] == dict(base, k_po=8.2e7, C_po=6.4e5)
+    # an amplitude fitted with its phase: the phase is kept too (it was reset to 0, 1.85 rad off on the hard
+    # set's torque law + unbalance s2, and a stiff, heavily damped compliance beside the unbalance looked needed)
+    seen.clear()
+    current = SimpleNamespace(values_=dict(values, T_unb=2.2e5, phi_unb=1.85))
+    d._backward(None, SETUP, ["drivetrain_compliance", "kiln_unbalance"], current, {}, None, None, None, None,
+                None, lambda s: None)
+    inits = {a[2]: a[5] for a in seen}
+    assert inits[("kiln_unbalance",)] == dict(base, T_unb=2.2e5, phi_unb=1.85)
 
 
 @pytest.mark.slow  # two evaluations and a refit of a two-effect structure on top of the shared diagnosis

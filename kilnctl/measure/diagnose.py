@@ -306,9 +306,9 @@ class Diagnosis:
         return "mu_c" in setup and _far(current.values_, setup)
 
     def _free_names(self, params, effects) -> set:
-        """Names of the parameters calibrated with base + effects."""
+        """Names of the parameters calibrated with base + effects (an amplitude's phase ``partner`` too)."""
         _, _, _, free = self._structure(params, effects)
-        return {f if isinstance(f, str) else f.name for f in free}
+        return {k for f in free for k in ((f,) if isinstance(f, str) else (f.name, f.partner)) if k}
 
     def _calibrate(self, m, params, effects, scales, mask, init, starts=(), experiment=None,
                    first_failure=None, new_effect=None, n_local=None, full_schedule=False, screen=1) -> Calibration:
