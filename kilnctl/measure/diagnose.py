@@ -558,11 +558,10 @@ class Diagnosis:
         """True when the record's current falls sharply again and again after the ramp (stick-slip
         breakaways, :func:`~kilnctl.measure.breakaways.breakaways`) and the current model's current does so
         less than half as often."""
-        active = m.t >= exp.t0 - 1e-9
-        t = m.t[active]
-        rec = breakaways(t, m.current[active], t_from=exp.steady_from)
+        rec = _falls(m, exp)
         if rec.size < 2:
             return False
+        t = m.t[m.t >= exp.t0 - 1e-9]
         return breakaways(t, current.run_.outputs["current_A"], t_from=exp.steady_from,
                           threshold=rec.threshold).size < rec.size / 2
 
@@ -847,10 +846,12 @@ class Diagnosis:
             effect_starts = effect_starts + _with_friction(_torque_law_starts(init.get("mu_c", p.mu_c)), eff, p, m)
         n_local = None
         rugged = self._rugged(effects)
-        if rugged:
+        if rugged and not (name == PAIRED and before and _falls(m, exp).size < 2):
             # stick-slip in the structure: the cost is rugged, one more local fit and no warm-start shortcut
             n_local = self.n_local + 1
         elif before:
+            # (the torque friction law too, on a record whose current shows no stick-slip falls after the
+            # ramp: the law's cycles are not what it shows, and its fit of the round before is where to start)
             # a later round: the effect's basin was found in the round before (against a model without the
             # effect selected since).  Start there too, on a third of the grid, with one local fit fewer
             effect_starts = [{k: v for k, v in before.items() if k not in current_values or k in
@@ -1299,6 +1300,13 @@ def _with_friction(law: list, eff, p, m) -> list[dict]:
     own = [own[i] for i in np.unique(np.linspace(0, len(own) - 1, PAIRED_STARTS).round().astype(int))] \
         if own else [{}]
     return [dict(f, **g) for f in law[::3] for g in own]
+
+
+def _falls(m, exp):
+    """The record's sharp falls of the current after the ramp (:func:`~kilnctl.measure.breakaways.breakaways`:
+    stick-slip breakaways)."""
+    active = m.t >= exp.t0 - 1e-9
+    return breakaways(m.t[active], m.current[active], t_from=exp.steady_from)
 
 
 def _far(values: dict, setup: dict) -> bool:
