@@ -194,7 +194,7 @@ class Comparison:
     @property
     def cautions(self) -> list:
         """The channels' :attr:`ChannelComparison.level_caution` texts (a fit below 0 %: units or setup)."""
-        return [c.level_caution for c in self.channels.values() if c.level_caution is not None]
+        return [t for t in (c.level_caution for c in self.channels.values()) if t is not None]
 
     @property
     def failing(self) -> list:

@@ -215,7 +215,7 @@ class Diagnosis:
         The setup's own model, before calibration, explains less of a
         channel than the record's mean does (a fit below 0 %): a column in
         other units or a setup for another drive (see
-        :attr:`~kilnctl.measure.compare.ChannelComparison.level_caution`).
+        :func:`~kilnctl.measure.compare.level_caution`).
     scales_ : dict
         Residual scale per channel that weights the structures' comparison [unit of the channel].
     train_, test_ : ndarray of bool
@@ -730,7 +730,7 @@ class Diagnosis:
 
     def _setup_cautions(self, m, params, exp) -> list[str]:
         """Cautions when the setup's own model, before any calibration, explains less of a channel than the
-        record's mean (:attr:`~kilnctl.measure.compare.ChannelComparison.level_caution`): a unit or setup
+        record's mean (:func:`~kilnctl.measure.compare.level_caution`): a unit or setup
         mismatch, which the calibration papers over with implausible values and effects then stand in for (a
         current logged in per cent of its rating: the base calibrated to a fit of 0.3 %, then a kiln unbalance
         of 4.4e5 N m was selected)."""
