@@ -242,6 +242,25 @@ def test_a_glitch_sample_is_named_as_such_not_as_a_unit(tmp_path):
         read_csv(_write(tmp_path, _csv(t, i, w2, r), "speed.csv"))
 
 
+def test_a_one_sample_spike_within_the_limits_is_noted_and_an_impact_is_not():
+    """Truth by construction: a start-up of kilnctl's generator (noise 4 A) with one current sample set to 3000 A
+    (twice the limit: reading accepts it); the same record without it; and a record whose backlash impacts ring
+    through many samples (the hard set's torque law + backlash, seed 2, 50 Hz)."""
+    from benchmarks.diagnose_records import find, make
+    from kilnctl.measure.synthetic import make_record
+
+    m, _ = make_record((), seed=1, t_end=12.0)
+    assert not [n for n in m.notes if "spike" in n]
+    cur = m.current.copy()
+    cur[400] = 3000.0
+    spiked = Measurement.from_arrays(m.t, cur, m.speed, m.speed_ref)
+    (note,) = [n for n in spiked.notes if "spike" in n]
+    assert note.startswith("column 'current_A': 1 isolated one-sample spike(s), the largest on sample ")
+    assert "3000 A" in note and "glitch" in note
+    impacts, _ = make(find("pair:torque_friction_law+backlash/s2"))
+    assert not [n for n in impacts.notes if "spike" in n]
+
+
 def test_timestamps_of_one_second_resolution_give_the_error_and_no_numpy_warning(tmp_path):
     """Timestamps written to the second (a historian's default) repeat within a second: one DataError, no warning.
 
