@@ -981,7 +981,7 @@ class Calibration:
             # grid's points 0.4 mm either side of it ranked below the gap's null value)
             search.set_horizon(1.0)
             prob.cycles_from = search.cycles_from
-        costs = [search.trial(u).cost for u in u0s] if len(u0s) > 1 else [0.0]
+        costs = [search.trial(u).cost for u in u0s] if len(u0s) > 1 and starts.n_local > 0 else [0.0]
         wide = search.cycles_from is not None and starts.n_local > 0 and space.coords and screen > 1
         firsts = [] if starts.n_local == 0 else \
             (replace(starts, n_local=screen * starts.n_local) if wide else starts).choose(u0s, costs)

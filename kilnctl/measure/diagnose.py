@@ -299,10 +299,14 @@ class Diagnosis:
             free += [fp for fp in CATALOGUE[e].parameters if fp.name not in have]
         return model, comps, p, free
 
+    def _setup_values(self, params) -> dict:
+        """The setup's values of the calibrated base parameters."""
+        return {k: float(params[k]) for k in self.calibrate}
+
     def _setup_far(self, params, current) -> bool:
         """True when one of the current model's calibrated base values lies far from the setup's (see
         :func:`_far`)."""
-        setup = {k: float(params[k]) for k in self.calibrate}
+        setup = self._setup_values(params)
         return "mu_c" in setup and _far(current.values_, setup)
 
     def _free_names(self, params, effects) -> set:
@@ -335,7 +339,7 @@ class Diagnosis:
         the final model never fits worse than the base it extends.
         """
         greedy = dict(current.values_)
-        setup_base = dict(greedy, **{k: float(params[k]) for k in self.calibrate})
+        setup_base = dict(greedy, **self._setup_values(params))
         extra = []
         if base is not None:
             null = {}
@@ -413,7 +417,7 @@ class Diagnosis:
             # (phase-free stage, and the law's smoothing widths: a breakaway a sample off is a cusp of the cost)
             _, smoothing, _ = _schedule(self._cyclic(()), None)
             base = base_cal.fit(m, experiment=exp, n_local=self.n_local + 1, cycles=True, smoothing=smoothing,
-                                starts=default_starts(self.calibrate, {k: float(params[k]) for k in self.calibrate})
+                                starts=default_starts(self.calibrate, self._setup_values(params))
                                 + _torque_law_starts(params.mu_c))
         else:
             base = base_cal.fit(m, experiment=exp, n_local=self.n_local + 1)
@@ -831,21 +835,27 @@ class Diagnosis:
         # current model (Calibration.fit keeps its starting values when no local fit improves on them)
         init = dict(current_values, **(eff.null or {}))
         model, comps, p, free = self._structure(params, effects)
+        # the base values from the current model and from the setup: the current model's calibration may sit
+        # in a regime (e.g. of the burden friction) that only made up for the missing effect
+        setup_base = {k: v for k, v in self._setup_values(params).items() if k in init}
+        rugged = self._rugged(effects)
+        if from_setup:  # the second pass: its own starts, and the local fits of a stick-slip structure
+            cal = self._refit_from_setup(m, params, effects, eff, p, init, setup_base, scales, train, exp,
+                                         first_failure, self.n_local + 1) \
+                if rugged and "mu_c" in setup_base and _far(init, setup_base) else None
+            return cal, None if cal is not None else "not searched from the setup's values", \
+                time.perf_counter() - t_start
         # global phase: a coarse grid over the effect's parameters (base at its calibrated values),
         # since output-error costs of impacts and stick-slip cycles have many local minima
         effect_starts = grid_starts(eff.parameters, eff.grid_points) + list(eff.starts(p, m)) + eff.usual_starts()
         if name == "torque_friction_law":
             effect_starts = _torque_law_starts(init.get("mu_c", p.mu_c))
-        # the base values from the current model and from the setup: the current model's calibration may sit
-        # in a regime (e.g. of the burden friction) that only made up for the missing effect
-        setup_base = {k: float(params[k]) for k in self.calibrate if k in init}
         if name != PAIRED and self._rugged(tuple(selected)):
             # stick-slip already in the model: its friction (mu_c, mu_s) may sit in a valley that only made up
             # for the missing effect, and a valley of the pair lies elsewhere in both.  The effect's own starts
             # (a few, evenly chosen) each with a coarse grid of the friction
             effect_starts = effect_starts + _with_friction(_torque_law_starts(init.get("mu_c", p.mu_c)), eff, p, m)
         n_local = None
-        rugged = self._rugged(effects)
         if rugged and not (name == PAIRED and before and _falls(m, exp).size < 2):
             # stick-slip in the structure: the cost is rugged, one more local fit and no warm-start shortcut
             n_local = self.n_local + 1
@@ -861,12 +871,6 @@ class Diagnosis:
         if any(abs(setup_base[k] - init[k]) > 1e-9 * abs(init[k]) for k in setup_base):
             # every second grid point again with the setup's base values
             starts += [dict(setup_base, **g) for g in (effect_starts or [{}])[::2]]
-        if from_setup:
-            cal = self._refit_from_setup(m, params, effects, eff, p, init, setup_base, scales, train, exp,
-                                         first_failure, n_local) \
-                if rugged and "mu_c" in setup_base and _far(init, setup_base) else None
-            return cal, None if cal is not None else "not searched from the setup's values", \
-                time.perf_counter() - t_start
         try:
             cal = self._calibrate(m, params, effects, scales, train, init, starts, experiment=exp,
                                   first_failure=first_failure, new_effect=name, n_local=n_local)

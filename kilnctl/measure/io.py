@@ -33,6 +33,7 @@ import numpy as np
 from ..errors import ConfigFileError, DataError, ParameterError, close_matches_hint
 from ..params import GROUPS, SPECS, Parameters
 from ..units import RPM_PER_RAD_S
+from .stats import robust_sigma
 
 __all__ = ["Measurement", "Setup", "Experiment", "read_csv", "read_record", "load_setup", "REQUIRED", "OPTIONAL",
            "MIN_DURATION_S", "MIN_SAMPLES", "GAP_FACTOR", "MAX_RECORD_S", "record_columns"]
@@ -948,8 +949,7 @@ def _spike_notes(arrays, lines, row_word, labels) -> list[str]:
             continue
         nb = np.stack([a[:-4], a[1:-3], a[3:-1], a[4:]])
         dev = a[2:-2] - np.median(nb, axis=0)
-        sigma = max(1.4826 * float(np.median(np.abs(np.diff(a, 2)))) / math.sqrt(6.0),
-                    1e-9 * (float(np.ptp(a)) or 1.0))
+        sigma = max(robust_sigma(np.diff(a, 2)) / math.sqrt(6.0), 1e-9 * (float(np.ptp(a)) or 1.0))
         bad = np.flatnonzero((np.abs(dev) > SPIKE_SIGMAS * sigma) & (np.abs(dev) > 5.0 * np.ptp(nb, axis=0)))
         if bad.size == 0:
             continue
