@@ -94,7 +94,7 @@ def test_a_search_from_the_setup_reaches_the_soft_drive_trains_valley():
     act = m.t >= exp.t0 - 1e-9
     run = run_model(params.replace(**base), m, exp)
     scales = {c: float(np.sqrt(np.mean((m.channels[c][act] - run.outputs[c]) ** 2))) for c in CHANNELS}
-    setup = {k: float(params[k]) for k in d.calibrate}
+    setup = d._setup_values(params)
     cal = d._refit_from_setup(m, params, effects, CATALOGUE["drivetrain_compliance"], p, base, setup, scales,
                               train, exp, None, 3)
     assert true_fit > 97.5
