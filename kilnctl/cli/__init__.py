@@ -314,7 +314,10 @@ def main(argv=None) -> int:
             # a Ctrl-C that lands in code which wraps it (an import creating a class: Python 3.11 turns an
             # exception in __set_name__ into a RuntimeError; a library turning it into its own error) is
             # still a Ctrl-C: exit 130 with the one line, not a traceback or "error"
-            if _caused_by_interrupt(exc):
+            # so is any error after the Ctrl-C was handled: C code that ran the handler (CasADi calling back
+            # into CVODES inside IPOPT) can report the KeyboardInterrupt as its own failure with the chain lost,
+            # and stderr is silenced by then (exit 2 and nothing said, seen once in CI)
+            if _caused_by_interrupt(exc) or (state is not None and state.handled.is_set()):
                 return _interrupted(command, state, "")
             if isinstance(exc, KilnctlError):
                 print(f"{command}: error: {exc}", file=sys.stderr)
