@@ -51,11 +51,17 @@ def test_json_has_the_documented_keys(second_motor_case):
     assert r["parameters"]["J_m2"]["stderr"] is not None
 
 
+@pytest.fixture(scope="module")
+def second_motor_report(second_motor_case, tmp_path_factory):
+    """The second-motor diagnosis' report, written once: (files written, folder)."""
+    folder = tmp_path_factory.mktemp("report") / "rep"
+    return second_motor_case[2].report(folder), folder
+
+
 @pytest.mark.slow  # the shared second-motor diagnosis takes about 40 s; test_diagnose_cli_json covers diagnose in the fast tier
-def test_report_is_one_self_contained_page(second_motor_case, tmp_path):
-    _, _, d = second_motor_case
-    files = d.report(tmp_path / "rep")
-    html = (tmp_path / "rep" / "diagnose.html").read_text()
+def test_report_is_one_self_contained_page(second_motor_report):
+    files, folder = second_motor_report
+    html = (folder / "diagnose.html").read_text()
     assert html.count("data:image/png;base64,") == 2 and 'src="http' not in html
     assert {p.name for p in files} >= {"diagnose.html", "diagnose.json"}
 
@@ -262,15 +268,16 @@ def test_every_periodic_catalogue_effect_says_what_else_makes_its_signature():
 
 
 @pytest.mark.slow  # needs the shared second-motor diagnosis (about 40 s)
-def test_report_reads_without_statistics_and_loads_in_a_browser(second_motor_case, tmp_path, load_in_chromium):
+def test_report_reads_without_statistics_and_loads_in_a_browser(second_motor_case, second_motor_report,
+                                                                 load_in_chromium):
     _, _, d = second_motor_case
-    d.report(tmp_path / "page")
-    text = (tmp_path / "page" / "diagnose.html").read_text()
+    _, folder = second_motor_report
+    text = (folder / "diagnose.html").read_text()
     assert "± inf" not in text and "+- inf" not in text and "{'" not in text  # no infinities, no Python dicts
     # truth: the diagnosis' own thresholds are the ones the how-to-read box explains
     assert f"below −{d.min_delta_bic:g}" in text and f"more than {d.min_holdout_gain:g} %" in text
     assert "Missing from the model: second motor" in text
-    out = load_in_chromium(tmp_path / "page" / "diagnose.html")
+    out = load_in_chromium(folder / "diagnose.html")
     assert out["errors"] == [] and out["broken_images"] == [] and out["images"] == 2
     assert out["page_width"] <= 1300
 
