@@ -33,6 +33,7 @@ import numpy as np
 from ..errors import ConfigFileError, DataError, ParameterError, close_matches_hint
 from ..params import GROUPS, SPECS, Parameters
 from ..units import RPM_PER_RAD_S
+from .reference import fit_scurve
 from .stats import robust_sigma
 
 __all__ = ["Measurement", "Setup", "Experiment", "read_csv", "read_record", "load_setup", "REQUIRED", "OPTIONAL",
@@ -72,6 +73,11 @@ class Experiment:
         Where these come from: ``setup`` or ``recorded speed_ref_rpm``.
     notes : tuple of str
         What was inferred and any disagreement with the setup file.
+    jerk : float or None
+        Jerk limit of a recorded S-curve reference [rpm/s^2] (then
+        ``ramp_rate`` is its acceleration limit, and the model's reference is
+        the S-curve, component ``ramp_scurve``; see
+        :mod:`kilnctl.measure.reference`), or None for a straight ramp.
     """
 
     t0: float
@@ -79,10 +85,15 @@ class Experiment:
     omega_ref: float
     source: str
     notes: tuple = ()
+    jerk: float | None = None
 
     @property
     def ramp_end(self) -> float:
         """Record time at which the speed reference reaches ``omega_ref`` [s] (``t0`` without a ramp)."""
+        if self.jerk is not None:
+            from ..model.ramps import scurve_timing
+
+            return self.t0 + float(scurve_timing(self.ramp_rate, self.jerk, self.omega_ref)[2])
         return self.t0 + (self.omega_ref / self.ramp_rate if self.ramp_rate > 0 else 0.0)
 
     @property
@@ -95,7 +106,7 @@ class Experiment:
     def to_dict(self) -> dict:
         """Return the experiment as a JSON-ready dictionary."""
         return {"t0_s": self.t0, "ramp_rate_rpm_per_s": self.ramp_rate, "omega_ref_rpm": self.omega_ref,
-                "source": self.source, "notes": list(self.notes)}
+                "jerk_rpm_per_s2": self.jerk, "source": self.source, "notes": list(self.notes)}
 
 
 @dataclass(frozen=True, eq=False)
@@ -214,7 +225,10 @@ class Measurement:
 
         With a recorded ``speed_ref_rpm`` the ramp is fitted to it (start time,
         rate, final value); the recorded values win over the setup when they
-        differ by more than 2 %, and a note says so.  Without it, the ramp of
+        differ by more than 2 %, and a note says so.  A recorded reference
+        whose corners are rounded (a drive's jerk limit) is fitted by an
+        S-curve, which the model then follows when it fits much better than
+        the straight ramp (:func:`~kilnctl.measure.reference.fit_scurve`).  Without it, the ramp of
         the setup is used, starting where the measured speed passes 2 % of
         ``omega_ref`` less the time the setup's model takes to get there from rest (or
         at ``t0``).
@@ -260,16 +274,23 @@ class Measurement:
         else:
             start = float(self.t[np.argmax(ref > 0.5 * top)])
             rate = max(top / max(self.dt, 1e-6), params.ramp_rate)
+        shape = fit_scurve(self.t, ref, top, rate, start) if math.isfinite(rate) and rate > 0 else None
+        jerk = None
+        if shape is not None:
+            start, rate, jerk = shape.t0, shape.a, shape.j
+            notes = [f"recorded speed_ref_rpm is an S-curve with rounded corners (acceleration {rate:.4g} "
+                     f"rpm/s, reached in {shape.rounding_s:.2f} s; fits the record to {shape.rms:.2g} rpm RMS "
+                     f"where a straight ramp misses by {shape.rms_straight:.2g}): the model follows it"]
         if t0 is not None:
             start = float(t0)
         start = max(start, float(self.t[0]))
-        for label, rec, setv, unit in (("ramp rate", rate, params.ramp_rate, "rpm/s"),
+        for label, rec, setv, unit in (("peak ramp rate" if jerk else "ramp rate", rate, params.ramp_rate, "rpm/s"),
                                        ("final speed reference", top, params.omega_ref, "rpm")):
             if abs(rec - setv) > 0.02 * abs(setv):
                 notes.append(f"recorded {label} {rec:.4g} {unit} differs from the setup's {setv:.4g} {unit}: "
                              "the recorded value is used")
         notes.append(f"start-up begins at t = {start:.3f} s (from the recorded speed reference)")
-        return Experiment(float(start), float(rate), float(top), "recorded speed_ref_rpm", tuple(notes))
+        return Experiment(float(start), float(rate), float(top), "recorded speed_ref_rpm", tuple(notes), jerk)
 
     def _start_from_speed(self, params: Parameters) -> float:
         """Start of the ramp from the measured speed's first rise (the first sample if the record starts moving).

@@ -100,7 +100,8 @@ def run_model(params: Parameters, measurement: Measurement, experiment: Experime
     measurement : Measurement
         The record.
     experiment : Experiment
-        Start time [s], ramp rate [rpm/s] and final reference [rpm].
+        Start time [s], ramp rate [rpm/s] and final reference [rpm] (and the
+        jerk limit of an S-curve reference [rpm/s^2], see :class:`Experiment`).
     model : {'macro', 'micro'}, default 'macro'
         Base model.
     effects : sequence of str
@@ -134,8 +135,12 @@ def run_model(params: Parameters, measurement: Measurement, experiment: Experime
     if t_stop is not None:
         t_end = min(t_end, max(float(t_stop) - experiment.t0, 4 * (t[1] - t[0]) if t.size > 1 else t_end))
     dt = _DT.get(model, 1e-3) if dt is None else dt
+    initial = None
+    if experiment.jerk is not None:  # a recorded S-curve reference: the model follows it
+        effects = ("ramp_scurve",) + tuple(effects)
+        initial = {"ramp_a": experiment.ramp_rate, "ramp_j": experiment.jerk}
     resp = simulate(p, model, t_end=t_end, effects=tuple(effects), remove=tuple(remove), dt=min(dt, t_end / 4),
-                    max_events=max_events)
+                    max_events=max_events, initial=initial)
     ts = np.asarray(resp.t, dtype=float)
     rel = t - experiment.t0
     keep = _last_of_each_time(ts)  # one index for every signal of the run
