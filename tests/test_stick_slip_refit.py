@@ -127,3 +127,37 @@ def test_backlash_starts_against_a_stick_slip_model_are_ranked_to_the_gap():
     assert true_fit > 97.5
     assert compare(m, cal.params_, model=model, effects=comps).fit["current_A"] > true_fit - 1.0
     assert cal.values_["delta_x"] == pytest.approx(truth["catalogue_values"]["delta_x"], rel=0.05)
+
+
+def test_a_compliance_too_damped_to_ring_is_not_taken_for_one():
+    # truth: kilnctl's generator (benchmarks/diagnose_records.py, "pair:torque_friction_law+kiln_unbalance/s2":
+    # torque law and a kiln unbalance, a rigid drive train).  The values are the diagnosis' final ones at
+    # 1aa76b4, which had added a drivetrain compliance of k_po 4.0e9 N m/rad and C_po 9.9e9 N m s/rad: a damping
+    # ratio of 29 (hand: C / (2 sqrt(k J_eff)), J_eff = 7.37e6 kg m^2 from the motor side J_m n^2 = 2.49e7
+    # and the kiln side J_kiln + J_v), which cannot ring.  Against the same values without it the refit was
+    # supported (BIC down by thousands); the effect's signature is a torsional ring, so it is not.  The
+    # generator's true compliances of the hard set (damping ratios 0.013-0.29) are not touched.
+    from kilnctl.measure.calibrate import holdout_masks
+    from kilnctl.measure.effects import CATALOGUE
+    from kilnctl.model.drivetrain import damping_ratio
+
+    effects = ("torque_friction_law", "kiln_unbalance", "drivetrain_compliance")
+    m, truth, params, d, exp, _, _, train = _hard_record("pair:torque_friction_law+kiln_unbalance/s2", effects)
+    assert truth["expected"] == ["torque_friction_law", "kiln_unbalance"]
+    final = {"mu_c": 0.38752347496221073, "mu_s": 0.5235724476623269, "m_v": 561142.3614881688,
+             "J_v": 1620774.621494095, "T_unb": 218976.9188558143, "phi_unb": 1.8469066845809297,
+             "k_po": 4036473066.01556, "C_po": 9937634843.211077}
+    without = {k: v for k, v in final.items() if k not in ("k_po", "C_po")}
+    scales = {"current_A": 71.4, "speed_rpm": 0.73}
+    _, test = holdout_masks(m, d.holdout, d.holdout_fraction, t0=exp.t0)
+    cal = d._calibrate(m, params, effects, scales, train, final, (), exp, None, None, 0)
+    current = d._calibrate(m, params, effects[:2], scales, train, without, (), exp, None, None, 0)
+    p_fit = cal.params_
+    j_eff = ((p_fit.J_m + p_fit.J_m2) * p_fit.n ** 2 * p_fit.J_e_eff) / ((p_fit.J_m + p_fit.J_m2) * p_fit.n ** 2
+                                                                         + p_fit.J_e_eff)
+    assert damping_ratio(final["k_po"], final["C_po"], p_fit) == pytest.approx(
+        final["C_po"] / (2 * np.sqrt(final["k_po"] * j_eff)), rel=1e-12)
+    r = d._evidence(m, "drivetrain_compliance", cal, current, scales, train, test, exp, 0.0)
+    assert r.delta_bic < -100 and not r.supported and "cannot ring" in r.reason
+    for v in ({"k_po": 2.58e8, "C_po": 2.35e6}, {"k_po": 5.17e7, "C_po": 1.11e7}, {"k_po": 1.5e9, "C_po": 6e7}):
+        assert CATALOGUE["drivetrain_compliance"].contradicts(v, p_fit) is None

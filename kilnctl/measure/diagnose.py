@@ -1059,6 +1059,12 @@ class Diagnosis:
                       f"coloured noise modelled {dbic_corr:+.1f}): likely fitting noise")
         ok_gain = ok_gain or ok_robust
         supported = ok_bic and ok_gain
+        eff = CATALOGUE.get(name)
+        odd = eff.contradicts(cal.values_, cal.params_) if supported and eff and eff.contradicts else None
+        if odd:  # the fit improves, but not by the effect's own signature (see Effect.contradicts)
+            supported = False
+            why_fit = reason[len("supported: "):] if reason.startswith("supported: ") else reason
+            reason = f"not the effect's signature: {odd} (its refit did improve the fit: {why_fit})"
         pars = {k: {"value": cal.values_[k], "stderr": cal.stderr_[k], "unit": _unit(k)} for k in cal.names_}
         return CandidateResult(name, float(dbic), float(gain), dict(cal.fit_percent_), hfit, pars,
                                list(cal.on_bound_), list(cal.not_identifiable_), supported, reason,

@@ -136,9 +136,10 @@ def run_model(params: Parameters, measurement: Measurement, experiment: Experime
         t_end = min(t_end, max(float(t_stop) - experiment.t0, 4 * (t[1] - t[0]) if t.size > 1 else t_end))
     dt = _DT.get(model, 1e-3) if dt is None else dt
     initial = None
-    if experiment.jerk is not None:  # a recorded S-curve reference: the model follows it
+    jerk = getattr(experiment, "jerk", None)  # (an experiment built by hand may not have one)
+    if jerk is not None:  # a recorded S-curve reference: the model follows it
         effects = ("ramp_scurve",) + tuple(effects)
-        initial = {"ramp_a": experiment.ramp_rate, "ramp_j": experiment.jerk}
+        initial = {"ramp_a": experiment.ramp_rate, "ramp_j": jerk}
     resp = simulate(p, model, t_end=t_end, effects=tuple(effects), remove=tuple(remove), dt=min(dt, t_end / 4),
                     max_events=max_events, initial=initial)
     ts = np.asarray(resp.t, dtype=float)

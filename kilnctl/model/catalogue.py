@@ -112,6 +112,14 @@ class Effect:
     relative_plausible : tuple of str
         Parameters whose ``plausible`` range is not in their own unit
         (skipped by :meth:`plausibility`).
+    contradicts : callable or None
+        ``contradicts(values, params) -> str or None``: why fitted values
+        (``values``, with the rest of the model's ``params``) describe
+        something other than the effect's signature, or None when they do
+        not (a drive train so damped that it cannot ring has no torsional
+        mode to show).  A candidate whose refit ends there is not supported:
+        it stands in for a difference the catalogue may lack.  Physics, not a
+        usual range: it holds for any magnitude.
     null : dict or None
         Values of its parameters at which the effect vanishes (or nearly:
         a lag of 0.1 ms), so that the structure with it contains the one
@@ -138,6 +146,7 @@ class Effect:
     short_record_note: str = ""
     null: dict | None = None
     relative_plausible: tuple = ()
+    contradicts: Callable | None = field(repr=False, default=None)
 
     def applicable(self, params: Parameters, model: str) -> str | None:
         """Return None if the effect can be added to this base, else the reason it cannot.

@@ -21,12 +21,54 @@ from .catalogue import Effect, FreeParameter
 DS_SCALE = 1e-4
 
 
+#: a fitted drive train damped at or above this ratio of its torsional mode has no ring to show (a step response
+#: overshoots by less than 5 %) [-]
+RING_DAMPING = 0.7
+
+
+def _mode_inertia(params) -> float:
+    """Inertia of the torsional mode between the motor side and the kiln, at the kiln axis [kg*m^2]."""
+    j_motor = (params.J_m + params.J_m2) * params.n ** 2  # motor side referred to the kiln (upper bound)
+    j_kiln = params.J_e_eff
+    return j_motor * j_kiln / (j_motor + j_kiln)
+
+
+def damping_ratio(k_po, C_po, params) -> float:
+    """Damping ratio of the drive train's torsional mode, C_po / (2 sqrt(k_po J_eff)) [-].
+
+    Parameters
+    ----------
+    k_po : float
+        Torsional stiffness at the kiln axis [N*m/rad].
+    C_po : float
+        Torsional damping at the kiln axis [N*m*s/rad].
+    params : Parameters
+        The model's other values (inertias J_m, J_m2, J_kiln, J_v and the reduction n).
+
+    Returns
+    -------
+    float
+    """
+    return float(C_po) / (2.0 * math.sqrt(float(k_po) * _mode_inertia(params)))
+
+
+def _no_ring(values, params) -> str | None:
+    """Why a fitted compliance cannot be the drive train's torsional mode, or None (see Effect.contradicts)."""
+    if "k_po" not in values or "C_po" not in values or not values["k_po"] > 0:
+        return None
+    zeta = damping_ratio(values["k_po"], values["C_po"], params)
+    if zeta < RING_DAMPING:
+        return None
+    f_hz = math.sqrt(values["k_po"] / _mode_inertia(params)) / (2 * math.pi)
+    return (f"its fitted drive train is damped at {zeta:.2g} of its {f_hz:.3g} Hz mode (from {RING_DAMPING:g} on a "
+            f"step overshoots by less than 5 %): it cannot ring, which is what a torsional compliance shows, and "
+            f"acts as a lag between motor and kiln, standing in for another difference")
+
+
 def _compliance_starts(params) -> list[dict]:
     """k_po on a fine geometric grid (40 points over 5 decades: the mode frequency within 8 %), C_po from
     damping ratios 0.03, 0.15, 0.6 of the torsional mode."""
-    j_motor = (params.J_m + params.J_m2) * params.n ** 2  # motor side referred to the kiln (upper bound)
-    j_kiln = params.J_e_eff
-    j_eff = j_motor * j_kiln / (j_motor + j_kiln)
+    j_eff = _mode_inertia(params)
     out = []
     for k in np.geomspace(1e6, 1e11, 40):
         for zeta in (0.03, 0.15, 0.6):
@@ -117,7 +159,7 @@ class DrivetrainCompliance(Component):
             "a damped oscillation of the current at the torsional mode (about 1.5 Hz with Table 1) after each "
             "change of torque: ramp start, ramp end, burden breakaway",
             starts=lambda params, m: _compliance_starts(params),
-            plausible={"k_po": (5e7, 5e8), "C_po": (2e6, 2e7)}, grid_points=0,
+            plausible={"k_po": (5e7, 5e8), "C_po": (2e6, 2e7)}, grid_points=0, contradicts=_no_ring,
             notes="started from a grid in stiffness (fine: the mode frequency must match) times damping ratios "
                   "0.03-0.6 of the mode between the motor side and the kiln."),
     )
