@@ -581,3 +581,21 @@ def test_rival_caution_of_a_pair_is_given_once():
     assert len(texts) == 1
     assert texts[0].startswith("torque_friction_law+second_motor was preferred to torque_friction_law+viscous_drag "
                                "by a BIC difference of only 7.0")
+
+
+def test_base_values_far_from_the_setup_are_named_and_near_ones_are_not():
+    # truth: two plants of the generator without any effect; one with its burden 40 % heavier than the setup
+    # says (m_v), one with the usual few per cent off.  The calibrated m_v follows the plant, and only the first
+    # diagnosis says that the final model lies far from the setup (the caution's threshold is 25 %).
+    from kilnctl.measure.diagnose import SETUP_DRIFT
+
+    heavy, truth = make_record((), seed=4, mismatch=("m_v",), mismatch_frac=0.4, t_end=16.0)
+    plant_m_v = truth["plant"]["m_v"]
+    assert abs(plant_m_v / SETUP.m_v - 1.0) == pytest.approx(0.4)
+    d = Diagnosis(SETUP, candidates=()).fit(heavy)
+    far = [c for c in d.caveats_ if c.startswith("The final model's")]
+    assert d.final_calibration_.values_["m_v"] == pytest.approx(plant_m_v, rel=0.05)
+    assert len(far) == 1 and "m_v = " in far[0] and "40 % " in far[0] and f"{SETUP.m_v:.3g} kg" in far[0]
+    near, _ = make_record((), seed=4, mismatch=("m_v",), mismatch_frac=0.05, t_end=16.0)
+    assert 0.05 < SETUP_DRIFT
+    assert not [c for c in Diagnosis(SETUP, candidates=()).fit(near).caveats_ if c.startswith("The final model's")]

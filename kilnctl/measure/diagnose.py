@@ -37,7 +37,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import KilnctlError, ModelError, NotFittedError, close_matches_hint
-from ..params import Parameters
+from ..params import SPECS, Parameters
 from ..simulate import resolve_gains
 from .calibrate import Calibration, Smoothing, default_starts, holdout_masks
 from .compare import compare_run, level_caution
@@ -70,6 +70,9 @@ OSCILLATION_MATCH = 0.05
 #: and of the current model's J_v
 PHASE_STEPS, PHASE_SPAN = 7, 0.015
 INERTIA_STEPS, INERTIA_SPAN = 11, 0.1
+#: the final model's base values checked against the setup's, and the fraction [-] beyond which a caution says
+#: so (mu_s is left out: outside stick-slip only the breakaway shows it, and it is fitted loosely)
+DRIFT_CHECKED, SETUP_DRIFT = ("mu_c", "m_v", "J_v"), 0.25
 #: a stick-slip structure is searched again from the setup's base values when the current model's differ from
 #: them by more than this fraction [-] in any base parameter (a setup is usually off by a few per cent)
 SETUP_FAR = 0.1
@@ -783,7 +786,30 @@ class Diagnosis:
                 out += self._rival_texts(r)
             for note in eff.plausibility(self.final_calibration_.values_):
                 out.append(f"{name}: {note} (a value outside the usual range is reported, not refused)")
-        return out
+        return out + self._drift_texts(params)
+
+    def _drift_texts(self, params) -> list[str]:
+        """A caution when the final model's friction, burden mass or kiln inertia lies more than
+        :data:`SETUP_DRIFT` from the setup's value: the calibration may have made up for a difference the
+        catalogue lacks (a motor constant falling with speed raises the current as a heavier burden does)."""
+        setup = self._setup_values(params)
+        final = self.final_calibration_.values_
+        far = [(k, final[k], setup[k]) for k in DRIFT_CHECKED
+               if k in final and k in setup and setup[k] > 0 and abs(final[k] / setup[k] - 1.0) > SETUP_DRIFT]
+        if not far:
+            return []
+
+        def unit(k):
+            u = SPECS[k].unit if k in SPECS else "-"
+            return "" if u in ("-", "") else " " + u
+
+        values = " and ".join(f"{k} = {v:.3g}{unit(k)}" for k, v, _ in far)
+        devs = " and ".join(f"{100 * abs(v / s0 - 1):.0f} % {'above' if v > s0 else 'below'}" for _, v, s0 in far)
+        given = ", ".join(f"{s0:.3g}{unit(k)}" for k, _, s0 in far)
+        verb = "lies" if len(far) == 1 else "lie"
+        return [f"The final model's {values} {verb} {devs} the setup's ({given}). If the setup is right, the "
+                f"calibration has made up for a difference the model lacks, which this diagnosis cannot name; if "
+                f"it is not, correct the setup."]
 
     def _rival_texts(self, r) -> list[str]:
         """A caution when another candidate of the round whose winner was ``r`` was supported too and its dBIC
