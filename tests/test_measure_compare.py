@@ -319,3 +319,21 @@ def test_report_folder_holding_an_input_of_a_report_name_is_refused_before_the_w
         err = capsys.readouterr().err
         assert f"holds the --data file {command}.json, which the report would overwrite" in err
         assert "Traceback" not in err and data.read_bytes() == raw
+
+
+def test_a_failing_interval_is_said_by_its_largest_miss():
+    """Truth: a constructed speed record at 500 rpm with a dip of 90 rpm (cosine-shaped, 19-21 s) that the model
+    (500 rpm throughout) lacks.  The measured signal's extreme in the interval is its edge (about 500 rpm), so
+    the sentence gives the largest miss instead: 90 rpm at 20.00 s, measured 410 rpm, model 500 rpm."""
+    from kilnctl.measure.compare import _describe
+
+    t = np.arange(0.0, 40.0, 0.02)
+    dip = np.where(np.abs(t - 20.0) < 1.0, 45.0 * (1.0 + np.cos(np.pi * (t - 20.0))), 0.0)
+    y, yhat = 500.0 - dip, np.full(t.size, 500.0)
+    e = y - yhat
+    (a, b), = failing_intervals(t, e + 0.01 * np.random.default_rng(0).standard_normal(t.size))
+    d = _describe(t, y, yhat, e, a, b, "rpm", [{"name": "hold", "t_start": 10.0, "t_end": 40.0}])
+    assert d["t_worst"] == pytest.approx(20.0) and d["measured_worst"] == pytest.approx(410.0)
+    assert d["measured_peak"] > 490.0  # the edge: what the sentence gave before
+    assert "model high by" in d["text"]
+    assert "by 90.0 rpm at 20.00 s (measured 410.0 rpm, model 500.0 rpm)" in d["text"]

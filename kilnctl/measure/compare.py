@@ -5,7 +5,7 @@
 >>> c.fit                                                     # doctest: +SKIP
 {'current_A': 62.1, 'speed_rpm': 99.2}
 >>> c.failing[0]["text"]                                      # doctest: +SKIP
-'0.0-6.8 s (ramp): measured peak 316 A, model 280 A (model low by 36 A on average)'
+'0.0-6.8 s (ramp): model low by 36 A on average, by 61 A at 1.52 s (measured 316 A, model 255 A)'
 """
 
 from __future__ import annotations
@@ -103,8 +103,11 @@ class ChannelComparison:
         :func:`~kilnctl.measure.stats.residual_spectrum` result.
     failing : list of dict
         Intervals with |residual| > 3 sigma: ``t_start``, ``t_end`` [s],
-        ``phase``, ``measured_peak``, ``model_peak``, ``mean_residual``,
-        ``text``.
+        ``phase``, ``measured_peak`` and ``model_peak`` (the measured
+        signal's extreme in the interval and the model's of the same sign),
+        ``mean_residual``, the largest miss (``t_worst`` [s],
+        ``measured_worst``, ``model_worst``), and ``text``, which gives the
+        mean and the largest miss.
     """
 
     name: str
@@ -366,14 +369,18 @@ def _describe(t, y, yhat, e, a, b, unit, phases) -> dict:
     km = int(np.argmax(np.abs(ym)))
     mp = float(ym[km])
     hp = float(yh.max() if mp >= 0 else yh.min())
+    # the largest miss, which the text gives: the measured peak of a dip is its edge, not its depth
+    kw = a + int(np.argmax(np.abs(e[sl])))
     mean = float(np.mean(e[sl]))
     ta, tb = float(t[a]), float(t[b])
     phase = _phase_of(phases, ta, tb)
     fmt = ".0f" if unit == "A" else ".1f"
-    text = (f"{ta:.1f}-{tb:.1f} s ({phase}): measured peak {mp:{fmt}} {unit}, model {hp:{fmt}} {unit} "
-            f"(model {'low' if mean > 0 else 'high'} by {abs(mean):{fmt}} {unit} on average)")
+    text = (f"{ta:.1f}-{tb:.1f} s ({phase}): model {'low' if mean > 0 else 'high'} by {abs(mean):{fmt}} {unit} on "
+            f"average, by {abs(float(e[kw])):{fmt}} {unit} at {float(t[kw]):.2f} s (measured {float(y[kw]):{fmt}} "
+            f"{unit}, model {float(yhat[kw]):{fmt}} {unit})")
     return {"t_start": ta, "t_end": tb, "phase": phase, "measured_peak": mp, "model_peak": hp,
-            "mean_residual": mean, "text": text}
+            "mean_residual": mean, "t_worst": float(t[kw]), "measured_worst": float(y[kw]),
+            "model_worst": float(yhat[kw]), "text": text}
 
 
 def compare_run(measurement: Measurement, run: ModelRun, experiment: Experiment, *, model="macro", effects=(),
