@@ -468,6 +468,14 @@ RECORDS = [
               effects={"dropout": {"t": 22.0, "dur": 1.2}, "adc": {"q": 10.0}}, expected=(), layout="ms",
               note="logger repeats its last sample for 1.2 s from t = 22 s; current quantised to 10 A; not in "
                    "the catalogue (a logging fault)"),
+    PlantSpec("f18_j2_field_weak", 40.0, 50.0, base=_NUIS, setup_kiln=dict(friction_law="torque"),
+              effects={"J2": {"J": 21.5}, "field_weak": {"w_base": 420.0}}, expected=("second_motor",),
+              layout="iso", note="the paper's second motor (21.5 kg m^2) on a drive weakening its field above 420 "
+                                 "rpm (0.84 at 500 rpm, not in the catalogue); J_m2 = 21.5 in kilnctl's form"),
+    PlantSpec("f19_stribeck_paperlaw", 40.0, 50.0, base=_NUIS, effects={"stribeck": {"v_s": 0.003}},
+              expected=("torque_friction_law",), layout="plain",
+              note="f11's Stribeck burden at 50 Hz, the setup not knowing the torque law (stick-slip cycles are "
+                   "there, shaped smoothly)"),
 ]
 
 
