@@ -476,6 +476,10 @@ RECORDS = [
               expected=("torque_friction_law",), layout="plain",
               note="f11's Stribeck burden at 50 Hz, the setup not knowing the torque law (stick-slip cycles are "
                    "there, shaped smoothly)"),
+    PlantSpec("f20_idrift_long", 140.0, 10.0, base=_NUIS, setup_kiln=dict(friction_law="torque"),
+              effects={"idrift": {"rate": 0.25}}, expected=(), layout="plain",
+              note="f14's drifting current-sensor offset, slower (0.25 A/s, 35 A over the record), on a record "
+                   "longer than one kiln revolution (140 s at 10 Hz); not in the catalogue"),
 ]
 
 
