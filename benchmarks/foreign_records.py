@@ -480,6 +480,8 @@ RECORDS = [
               effects={"idrift": {"rate": 0.25}}, expected=(), layout="plain",
               note="f14's drifting current-sensor offset, slower (0.25 A/s, 35 A over the record), on a record "
                    "longer than one kiln revolution (140 s at 10 Hz); not in the catalogue"),
+    PlantSpec("f20b_free_long", 140.0, 10.0, base=_NUIS, setup_kiln=dict(friction_law="torque"), layout="plain",
+              note="f20's control: the same plant and logger without the drift (no effect)"),
 ]
 
 
