@@ -22,6 +22,23 @@ kilnctl's model nor ``benchmarks/baselines.py``.  Its own formulation:
   ``isensor`` (current sensor with a gain error and an offset; not in
   kilnctl's catalogue), ``load_step`` (a load torque switched on at the kiln
   mid-record; not in the catalogue).
+* Effect forms added by the third red team (each documented where it acts):
+  ``ilimit`` (the converter's own current limiter: a PI loop of finite bandwidth on
+  the armature current above ``I_lim`` that takes voltage off the speed loop's
+  command, the speed integrator frozen while it acts: the catalogue's
+  current_limit in another form), ``stribeck`` (sliding friction of the burden
+  falling smoothly from mu_s to mu_c with the slip speed, ``exp(-(v/v_s)^2)``,
+  instead of the abrupt switch), ``gear_ripple`` (girth-gear mesh torque ripple
+  at the tooth-passing frequency, ``a |T| sin(Z theta_k)``), ``encoder`` (speed
+  from an incremental encoder: pulses counted over a window ``T_w``, held; fed
+  back and logged: quantised and delayed by about ``T_w/2``, the catalogue's
+  speed_sensor_lag in another form), ``field_weak`` (flux weakened above
+  ``w_base`` rpm: k_b and k_i scaled by ``w_base/|w|``), ``scurve`` (a
+  jerk-limited speed reference, the rate rising and falling linearly over
+  ``T_j`` s at each end, same end time as the straight ramp), and, in the
+  logged signals only, ``idrift`` (a current-sensor offset drifting linearly at
+  ``rate`` A/s), ``dropout`` (the logger repeating its last sample of both
+  channels from ``t`` for ``dur`` s) and ``adc`` (current quantised to ``q`` A).
 
 Records are written in layouts kilnctl has not seen (column names, units,
 rates, ISO timestamps, missing samples, uneven time base), each with the
@@ -43,7 +60,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["PlantSpec", "RECORDS", "simulate_plant", "write_record", "main"]
+__all__ = ["PlantSpec", "RECORDS", "plant_constants", "simulate_plant", "write_record", "main"]
 
 # Table 1 of the paper (and NOTES.md readings), SI units
 TABLE1 = dict(R_a=0.00961, L_a=0.00057, k_i=4.6, k_b=4.6, J_m=21.5, B_m=0.005, J_o=6.978e6, J_v=1.678e6,
@@ -76,17 +93,51 @@ class PlantSpec:
     h: float = 5e-4                    # the plant's RK4 step [s] (1e-3 is enough where a test needs speed)
 
 
+def _reference(t, c):
+    """Speed reference [rpm]: the straight ramp, or with ``T_j`` > 0 (``scurve``) a jerk-limited one.
+
+    The S-curve's rate rises linearly from 0 to r over T_j, holds, and falls linearly to 0 over T_j,
+    ending at the straight ramp's end time T = omega_ref / ramp_rate, so r = omega_ref / (T - T_j).
+    """
+    if t <= 0:
+        return 0.0
+    W, T, Tj = c["omega_ref"], c["omega_ref"] / c["ramp_rate"], c["T_j"]
+    if Tj <= 0:
+        return min(c["ramp_rate"] * t, W)
+    if t >= T:
+        return W
+    r = W / (T - Tj)
+    if t < Tj:
+        return 0.5 * r * t * t / Tj
+    if t <= T - Tj:
+        return 0.5 * r * Tj + r * (t - Tj)
+    u = T - t
+    return W - 0.5 * r * u * u / Tj
+
+
 def _rhs(x, t, c, mode):
-    """Right-hand side of the plant. State x = [x_a, z, w_m, th_m, w_k, th_k, psi, w_b, w_s, ...]."""
-    x_a, z, w_m, th_m, w_k, th_k, psi, w_b, w_s = x
-    e_v = min(c["ramp_rate"] * t, c["omega_ref"]) if t > 0 else 0.0
-    ev_dot = c["ramp_rate"] if 0 < t < c["omega_ref"] / c["ramp_rate"] else 0.0
-    w_fb = w_s if c["tau_s"] > 0 else w_m
+    """Right-hand side of the plant. State x = [x_a, z, w_m, th_m, w_k, th_k, psi, w_b, w_s, z_l]."""
+    x_a, z, w_m, th_m, w_k, th_k, psi, w_b, w_s, z_l = x
+    e_v = _reference(t, c)
+    if c["T_w"] > 0:
+        w_fb = c["w_enc"]           # encoder speed, updated by simulate_plant every T_w
+    else:
+        w_fb = w_s if c["tau_s"] > 0 else w_m
     e_f = e_v - K_FB * w_fb
     e_pi = c["k_p"] * e_f + c["k_I"] * z
-    clamped = abs(e_pi) > c["V_max"] and e_pi * e_f > 0
-    e_a = max(-c["V_max"], min(c["V_max"], e_pi))
     i_a = x_a + c["k_D"] / c["L_a"] * e_f
+    # ilimit: the converter's current limiter takes u_l = k_pl (i - I_lim)+ + k_il z_l off the command
+    u_l = 0.0
+    if c["I_lim"] > 0:
+        u_l = c["k_pl"] * max(0.0, i_a - c["I_lim"]) + c["k_il"] * z_l
+    e_cmd = e_pi - u_l
+    clamped = (abs(e_cmd) > c["V_max"] and e_pi * e_f > 0) or (u_l > 0 and e_f > 0)
+    e_a = max(-c["V_max"], min(c["V_max"], e_cmd))
+    dz_l = (i_a - c["I_lim"]) if (c["I_lim"] > 0 and (z_l > 0 or i_a > c["I_lim"])) else 0.0
+    # field_weak: flux falls as w_base / |w| above the base speed (k_b and k_i alike)
+    phi = 1.0
+    if c["w_base"] > 0 and abs(w_m) > c["w_base"]:
+        phi = c["w_base"] / abs(w_m)
     # sensor
     dw_s = (w_m - w_s) / c["tau_s"] if c["tau_s"] > 0 else 0.0
     # burden and kiln torques (kiln axis)
@@ -94,7 +145,7 @@ def _rhs(x, t, c, mode):
     T_grav = mg * c["L"] * math.sin(psi)
     T_brg = c["T_brg"] * math.tanh(w_k / 1e-3)
     T_load = c["load"] if t >= c["load_t"] else 0.0
-    T_motor = c["k_i"] * i_a - c["B_m"] * w_m - c["T_cm"] * math.tanh(w_m / 0.05)
+    T_motor = phi * c["k_i"] * i_a - c["B_m"] * w_m - c["T_cm"] * math.tanh(w_m / 0.05)
     J_mot = c["J_m"] + c["J2"]
     if c["k_s"] > 0:   # compliant shaft on the motor axis between motor and gearbox
         T_sh = c["k_s"] * (th_m - c["n"] * th_k) + c["c_s"] * (w_m - c["n"] * w_k)
@@ -107,19 +158,24 @@ def _rhs(x, t, c, mode):
         T_drive_k = c["n"] * T_motor
         J_drv = J_mot * c["n"] ** 2
         J_k = c["J_o"] + J_drv
+    if c["a_rip"] > 0:   # gear_ripple: mesh torque ripple at the girth gear's tooth-passing frequency
+        T_drive_k = T_drive_k * (1.0 + c["a_rip"] * math.sin(c["Z_rip"] * th_k))
     if mode == 0:  # stuck: burden turns with the shell
         a_k = (T_drive_k - T_grav - T_brg - T_load) / (J_k + c["J_v"])
         a_b = a_k
     else:
-        T_f = c["mu_c"] * mg * c["R"] * math.cos(psi) * (1.0 if mode > 0 else -1.0)
+        mu = c["mu_c"]
+        if c["v_st"] > 0:   # stribeck: friction falls smoothly from mu_s to mu_c with the slip speed
+            mu = c["mu_c"] + (c["mu_s"] - c["mu_c"]) * math.exp(-((w_k - w_b) / c["v_st"]) ** 2)
+        T_f = mu * mg * c["R"] * math.cos(psi) * (1.0 if mode > 0 else -1.0)
         a_k = (T_drive_k - T_f - T_brg - T_load) / J_k
         a_b = (T_f - T_grav) / c["J_v"]
     if a_m is None:
         a_m = c["n"] * a_k
     # derivative of e_f for x_a: x_a = i_a - (k_D/L_a) e_f, L_a di/dt = e_a + k_D de_f - R i - k_b w
-    dx_a = (e_a - c["R_a"] * i_a - c["k_b"] * w_m) / c["L_a"]
+    dx_a = (e_a - c["R_a"] * i_a - phi * c["k_b"] * w_m) / c["L_a"]
     dz = 0.0 if clamped else e_f
-    d = np.array([dx_a, dz, a_m, w_m, a_k, w_k, w_b if mode else w_k, a_b, dw_s])
+    d = np.array([dx_a, dz, a_m, w_m, a_k, w_k, w_b if mode else w_k, a_b, dw_s, dz_l])
     return d, i_a, w_fb, e_v
 
 
@@ -129,6 +185,26 @@ def _holding(x, t, c):
     mg = c["m_v"] * c["g"]
     T_h = c["J_v"] * d[4] + mg * c["L"] * math.sin(x[6])
     return T_h, c["mu_s"] * mg * c["R"] * math.cos(x[6])
+
+
+def plant_constants(spec: PlantSpec) -> dict:
+    """The plant's constants for ``_rhs``: Table 1 with the spec's overrides, controller and effect values."""
+    p = dict(TABLE1)
+    p.update(spec.base)
+    eff = spec.effects
+    return dict(p, k_p=spec.gains[0], k_I=spec.gains[1], k_D=spec.gains[2], ramp_rate=spec.ramp_rate,
+             omega_ref=spec.omega_ref, V_max=spec.V_max,
+             T_brg=2 * p["mu_brg"] * p["P"] / 2 * math.cos(math.pi / 6) * (p["l_brg"] + p["k_brg"]) / 2,
+             J2=eff.get("J2", {}).get("J", 0.0), k_s=eff.get("shaft", {}).get("k", 0.0),
+             c_s=eff.get("shaft", {}).get("c", 0.0), tau_s=eff.get("lag", {}).get("tau", 0.0),
+             T_cm=eff.get("coulomb", {}).get("T", 0.0), load=eff.get("load_step", {}).get("T", 0.0),
+             load_t=eff.get("load_step", {}).get("t", 1e9),
+             I_lim=eff.get("ilimit", {}).get("I", 0.0), k_pl=eff.get("ilimit", {}).get("k_p", 0.1),
+             k_il=eff.get("ilimit", {}).get("k_i", 1.7), v_st=eff.get("stribeck", {}).get("v_s", 0.0),
+             a_rip=eff.get("gear_ripple", {}).get("a", 0.0), Z_rip=eff.get("gear_ripple", {}).get("Z", 180),
+             T_w=eff.get("encoder", {}).get("T_w", 0.0), ppr=eff.get("encoder", {}).get("ppr", 1024),
+             w_enc=0.0, w_base=eff.get("field_weak", {}).get("w_base", 0.0) / K_FB,
+             T_j=eff.get("scurve", {}).get("T_j", 0.0))
 
 
 def simulate_plant(spec: PlantSpec, h: float = 5e-4):
@@ -147,18 +223,11 @@ def simulate_plant(spec: PlantSpec, h: float = 5e-4):
         ``t`` [s] (0 = ramp start), true motor current ``i_a`` [A], motor speed ``w_m`` [rad/s],
         sensor speed ``w_s`` [rad/s], reference ``e_v`` [rpm], number of mode changes ``events``.
     """
-    p = dict(TABLE1)
-    p.update(spec.base)
-    eff = spec.effects
-    c = dict(p, k_p=spec.gains[0], k_I=spec.gains[1], k_D=spec.gains[2], ramp_rate=spec.ramp_rate,
-             omega_ref=spec.omega_ref, V_max=spec.V_max,
-             T_brg=2 * p["mu_brg"] * p["P"] / 2 * math.cos(math.pi / 6) * (p["l_brg"] + p["k_brg"]) / 2,
-             J2=eff.get("J2", {}).get("J", 0.0), k_s=eff.get("shaft", {}).get("k", 0.0),
-             c_s=eff.get("shaft", {}).get("c", 0.0), tau_s=eff.get("lag", {}).get("tau", 0.0),
-             T_cm=eff.get("coulomb", {}).get("T", 0.0), load=eff.get("load_step", {}).get("T", 0.0),
-             load_t=eff.get("load_step", {}).get("t", 1e9))
+    c = plant_constants(spec)
     n_steps = int(round(spec.t_end / h))
-    x = np.zeros(9)
+    x = np.zeros(10)
+    enc_every = max(1, int(round(c["T_w"] / h))) if c["T_w"] > 0 else 0
+    enc_prev = 0
     mode = 0
     out_t = np.empty(n_steps + 1)
     out = np.empty((n_steps + 1, 4))
@@ -167,7 +236,7 @@ def simulate_plant(spec: PlantSpec, h: float = 5e-4):
     for k in range(n_steps + 1):
         d, i_a, w_fb, e_v = _rhs(x, t, c, mode)
         out_t[k] = t
-        out[k] = (i_a, x[2], x[8] if c["tau_s"] > 0 else x[2], e_v)
+        out[k] = (i_a, x[2], w_fb if (c["tau_s"] > 0 or c["T_w"] > 0) else x[2], e_v)
         if k == n_steps:
             break
         k1 = d
@@ -189,7 +258,13 @@ def simulate_plant(spec: PlantSpec, h: float = 5e-4):
                 T_h, T_s = _holding(x_new, t, c)
                 mode = 0 if abs(T_h) <= T_s else (1 if T_h > 0 else -1)
                 events += 1
+        if c["I_lim"] > 0:
+            x_new[9] = max(0.0, x_new[9])   # the limiter's integrator only takes voltage off
         x = x_new
+        if enc_every and (k + 1) % enc_every == 0:   # encoder: whole pulses counted over the last window
+            cnt = math.floor(x[3] * c["ppr"] / (2 * math.pi))
+            c["w_enc"] = (cnt - enc_prev) * 2 * math.pi / c["ppr"] / (enc_every * h)
+            enc_prev = cnt
     return dict(t=out_t, i_a=out[:, 0], w_m=out[:, 1], w_s=out[:, 2], e_v=out[:, 3], events=events)
 
 
@@ -234,6 +309,17 @@ def logged(spec: PlantSpec):
     n = w * K_FB
     i = i + rng.standard_normal(t.size) * spec.noise[0] + _noise(rng, t.size, dt, spec.ar1[0], spec.ar1[2])
     n = n + rng.standard_normal(t.size) * spec.noise[1] + _noise(rng, t.size, dt, spec.ar1[1], spec.ar1[2])
+    if "idrift" in spec.effects:   # current-sensor offset drifting from the trigger on (warm-up)
+        i = i + spec.effects["idrift"]["rate"] * (t + spec.pre_s)
+    if "adc" in spec.effects:      # current ADC: quantised to q A
+        q = spec.effects["adc"]["q"]
+        i = q * np.round(i / q)
+    if "dropout" in spec.effects:  # logger repeats its last sample of both channels for dur s
+        d = spec.effects["dropout"]
+        held = (t >= d["t"]) & (t < d["t"] + d["dur"])
+        if held.any():
+            k0 = np.flatnonzero(held)[0] - 1
+            i[held], n[held] = i[k0], n[k0]
     return dict(t=t, i=i, n=n, ref=ref, events=sim["events"])
 
 
@@ -350,6 +436,52 @@ RECORDS = [
     PlantSpec("f8_kiln_speed", 120.0, 25.0, base=_NUIS, effects={"J2": {"J": 21.5}},
               expected=("torque_friction_law", "second_motor"), layout="kiln",
               note="the paper's second motor (21.5 kg m^2); only the kiln speed logged; 120 s at 25 Hz"),
+    # third red team: effect forms of its own (see the module's docstring)
+    PlantSpec("f10_ilimit", 40.0, 50.0, base=_NUIS, setup_kiln=dict(friction_law="torque"),
+              effects={"ilimit": {"I": 900.0, "k_p": 0.1, "k_i": 1.7}}, expected=("current_limit",),
+              layout="plain", note="converter current limiter at 900 A, PI of about 30 Hz bandwidth (overshoots "
+                                   "briefly), speed integrator frozen while it acts; kilnctl's form: I_max = 900 A"),
+    PlantSpec("f11_stribeck", 40.0, 100.0, base=_NUIS, setup_kiln=dict(friction_law="torque"),
+              effects={"stribeck": {"v_s": 0.003}}, expected=(), layout="ms",
+              note="burden friction falling smoothly from mu_s to mu_c with slip speed (v_s = 3 mrad/s), not "
+                   "abruptly; the setup knows the torque law; not in the catalogue"),
+    PlantSpec("f12_gear_ripple", 40.0, 50.0, base=_NUIS, setup_kiln=dict(friction_law="torque"),
+              effects={"gear_ripple": {"a": 0.03, "Z": 180}}, expected=(), layout="iso",
+              note="girth-gear mesh ripple, 3 % of the transmitted torque at 180 x kiln angle (1.39 Hz at set "
+                   "speed, a chirp along the ramp); not in the catalogue"),
+    PlantSpec("f13_encoder", 40.0, 50.0, base=_NUIS, setup_kiln=dict(friction_law="torque"),
+              effects={"encoder": {"T_w": 0.006, "ppr": 4096}}, expected=("speed_sensor_lag",), layout="uneven",
+              note="speed from an encoder, 4096 counts/rev over 6 ms windows, held (about 6 ms delay, 2.4 rpm "
+                   "steps); fed back and logged; the loop hunts at 8 ms; kilnctl's form: tau_s of about 0.006 s"),
+    PlantSpec("f14_idrift", 40.0, 50.0, base=_NUIS, setup_kiln=dict(friction_law="torque"),
+              effects={"idrift": {"rate": 0.75}}, expected=(), layout="plain",
+              note="current-sensor offset drifting 0.75 A/s (30 A over the record); logged only; not in the "
+                   "catalogue"),
+    PlantSpec("f15_field_weak", 40.0, 50.0, base=_NUIS, setup_kiln=dict(friction_law="torque"),
+              effects={"field_weak": {"w_base": 350.0}}, expected=(), layout="ms",
+              note="field weakening above 350 rpm (k_b, k_i x 350/n: 0.7 at 500 rpm); not in the catalogue"),
+    PlantSpec("f16_scurve", 30.0, 50.0, base=_NUIS, setup_kiln=dict(friction_law="torque"),
+              effects={"scurve": {"T_j": 2.0}}, expected=(), layout="plain",
+              note="jerk-limited reference (rate up and down over 2 s, peak 105 rpm/s, same end time as the 74 "
+                   "rpm/s ramp) logged in n_ref; not in the catalogue"),
+    PlantSpec("f17_dropout_adc", 40.0, 100.0, base=_NUIS, setup_kiln=dict(friction_law="torque"),
+              effects={"dropout": {"t": 22.0, "dur": 1.2}, "adc": {"q": 10.0}}, expected=(), layout="ms",
+              note="logger repeats its last sample for 1.2 s from t = 22 s; current quantised to 10 A; not in "
+                   "the catalogue (a logging fault)"),
+    PlantSpec("f18_j2_field_weak", 40.0, 50.0, base=_NUIS, setup_kiln=dict(friction_law="torque"),
+              effects={"J2": {"J": 21.5}, "field_weak": {"w_base": 420.0}}, expected=("second_motor",),
+              layout="iso", note="the paper's second motor (21.5 kg m^2) on a drive weakening its field above 420 "
+                                 "rpm (0.84 at 500 rpm, not in the catalogue); J_m2 = 21.5 in kilnctl's form"),
+    PlantSpec("f19_stribeck_paperlaw", 40.0, 50.0, base=_NUIS, effects={"stribeck": {"v_s": 0.003}},
+              expected=("torque_friction_law",), layout="plain",
+              note="f11's Stribeck burden at 50 Hz, the setup not knowing the torque law (stick-slip cycles are "
+                   "there, shaped smoothly)"),
+    PlantSpec("f20_idrift_long", 140.0, 10.0, base=_NUIS, setup_kiln=dict(friction_law="torque"),
+              effects={"idrift": {"rate": 0.25}}, expected=(), layout="plain",
+              note="f14's drifting current-sensor offset, slower (0.25 A/s, 35 A over the record), on a record "
+                   "longer than one kiln revolution (140 s at 10 Hz); not in the catalogue"),
+    PlantSpec("f20b_free_long", 140.0, 10.0, base=_NUIS, setup_kiln=dict(friction_law="torque"), layout="plain",
+              note="f20's control: the same plant and logger without the drift (no effect)"),
 ]
 
 

@@ -291,3 +291,124 @@ def test_a_thousands_separator_is_named_as_such(tmp_path):
     with pytest.raises(DataError, match=rf"line {first + 2}, column 'current_A': '{re.escape(de[first])}' is not a "
                                         r"number \(a thousands separator\? export the numbers without one"):
         read_record(p)
+
+
+# --- third red team: the plant's new effect forms, each against a truth derived by hand -------------------------
+
+def _plant():
+    from benchmarks import foreign_records as fr
+
+    return fr
+
+
+def test_scurve_reference_is_jerk_limited_and_ends_with_the_ramp():
+    # truth (hand): rate r = W / (T - T_j) with T = W / ramp_rate; W/2 at T/2 by symmetry; r T_j / 2 at T_j;
+    # the full value from T on; rate continuous (no step at the corners)
+    fr = _plant()
+    c = fr.plant_constants(fr.PlantSpec("t_s", 10.0, 50.0, effects={"scurve": {"T_j": 2.0}}))
+    W, T = 500.0, 500.0 / 74.0
+    r = W / (T - 2.0)
+    assert fr._reference(T / 2, c) == pytest.approx(W / 2, rel=1e-12)
+    assert fr._reference(2.0, c) == pytest.approx(r * 2.0 / 2, rel=1e-12)
+    assert fr._reference(T, c) == pytest.approx(W) and fr._reference(T + 3.0, c) == W
+    ts = np.linspace(0.0, T + 1.0, 20001)
+    rate = np.gradient([fr._reference(x, c) for x in ts], ts)
+    assert rate.max() == pytest.approx(r, rel=1e-3) and np.abs(np.diff(rate)).max() < 0.05
+
+
+def test_stribeck_and_gear_ripple_torques_in_the_right_hand_side():
+    # truth (hand): sliding burden: J_v a_b = mu(v) m g R cos psi - m g L sin psi with
+    # mu(v) = mu_c + (mu_s - mu_c) exp(-(v / v_s)^2), v the slip speed; stuck burden with mesh ripple:
+    # (J_o + J_v + J_m n^2) a_k = n k_i i (1 + a sin(Z theta_k)) - m g L sin psi - T_brg (B_m w = 0 at rest)
+    fr = _plant()
+    p = fr.TABLE1
+    c = fr.plant_constants(fr.PlantSpec("t_r", 1.0, 50.0, effects={"stribeck": {"v_s": 0.003}}))
+    psi, w_k, v = 0.3, 0.04, 0.003
+    x = np.array([0, 0, w_k * p["n"], 0, w_k, 0, psi, w_k - v, 0, 0], float)
+    d = fr._rhs(x, 1.0, c, 1)[0]
+    mu = p["mu_c"] + (p["mu_s"] - p["mu_c"]) / math.e
+    mg = p["m_v"] * p["g"]
+    assert d[7] == pytest.approx((mu * mg * p["R"] * math.cos(psi) - mg * p["L"] * math.sin(psi)) / p["J_v"], rel=1e-9)
+    c = fr.plant_constants(fr.PlantSpec("t_r", 1.0, 50.0, effects={"gear_ripple": {"a": 0.03, "Z": 180}}))
+    th_k = 0.5 / 180 * math.pi  # sin(Z theta_k) = 1
+    x = np.array([800.0, 0, 0, 0, 0, th_k, 0.2, 0, 0, 0])
+    d, i_a, _, _ = fr._rhs(x, 0.0, c, 0)
+    J = p["J_o"] + p["J_v"] + p["J_m"] * p["n"] ** 2
+    assert d[4] == pytest.approx((p["n"] * p["k_i"] * i_a * 1.03 - mg * p["L"] * math.sin(0.2)) / J, rel=1e-9)
+
+
+def test_gear_ripple_shows_at_the_tooth_passing_frequency():
+    # truth (hand): at the set speed the kiln turns at 500 / n rpm, so 180 teeth pass at 180 * 500 / n / 60 Hz
+    fr = _plant()
+    spec = fr.PlantSpec("t_g", 16.0, 50.0, base=dict(mu_s=0.4, mu_c=0.4), effects={"gear_ripple": {"a": 0.03, "Z": 180}})
+    sim = fr.simulate_plant(spec, h=2e-3)
+    spec.effects = {}
+    smooth = fr.simulate_plant(spec, h=2e-3)  # the same plant without the ripple: the difference is the ripple's
+    late = sim["t"] > 9.0
+    i = sim["i_a"][late] - smooth["i_a"][late]
+    i = i - np.mean(i)
+    f = np.fft.rfftfreq(i.size, 2e-3)
+    peak = f[np.argmax(np.abs(np.fft.rfft(i * np.hanning(i.size)))[1:]) + 1]
+    assert peak == pytest.approx(180 * 500.0 / fr.TABLE1["n"] / 60.0, abs=1.0 / 7.0)  # the window's resolution
+
+
+def test_field_weakening_raises_the_sliding_current_by_the_flux_ratio():
+    # truth (NOTES.md worked steady state, as above): torque k_i phi i with phi = w_base / w above base speed, so
+    # the steady sliding current is i_hand * 500 / 350
+    fr = _plant()
+    spec = fr.PlantSpec("t_fw", 24.0, 50.0, base=dict(mu_s=0.4, mu_c=0.4), effects={"field_weak": {"w_base": 350.0}})
+    sim = fr.simulate_plant(spec, h=1e-3)
+    p = fr.TABLE1
+    psi = math.atan(0.4 * p["R"] / p["L"])
+    t_brg = p["mu_brg"] * p["P"] * math.cos(math.pi / 6) * (p["l_brg"] + p["k_brg"]) / 2
+    i_hand = (0.4 * p["m_v"] * p["g"] * p["R"] * math.cos(psi) + t_brg) / (p["n"] * p["k_i"])
+    late = sim["t"] > 19.0
+    assert np.mean(sim["i_a"][late]) == pytest.approx(i_hand * 500.0 / 350.0, rel=0.01)
+
+
+def test_current_limiter_holds_the_hand_derived_level():
+    # truth (hand, k_D = 0, L_a neglected): while the limiter acts and the kiln decelerates at a_m, the speed
+    # loop's command rises at (k_p K + k_b)|a_m| V/s, which the limiter's integral k_il (i - I_lim) must match;
+    # with a_m = k_i (i - i_hand) / J_eq (J_eq = J_m + (J_o + J_v) / n^2, burden still held) the current is
+    # i = (I_lim + g i_hand) / (1 + g), g = (k_p K + k_b) k_i / (k_il J_eq)
+    fr = _plant()
+    p = fr.TABLE1
+    spec = fr.PlantSpec("t_lim", 16.2, 50.0, gains=(2.0, 5.0, 0.0), base=dict(mu_s=0.4, mu_c=0.4),
+                        effects={"ilimit": {"I": 700.0, "k_p": 0.1, "k_i": 20.0}})
+    sim = fr.simulate_plant(spec, h=1e-3)
+    psi = math.atan(0.4 * p["R"] / p["L"])
+    t_brg = p["mu_brg"] * p["P"] * math.cos(math.pi / 6) * (p["l_brg"] + p["k_brg"]) / 2
+    i_hand = (0.4 * p["m_v"] * p["g"] * p["R"] * math.cos(psi) + t_brg) / (p["n"] * p["k_i"])
+    g = (2.0 * fr.K_FB + p["k_b"]) * p["k_i"] / (20.0 * (p["J_m"] + (p["J_o"] + p["J_v"]) / p["n"] ** 2))
+    win = (sim["t"] > 15.8) & (sim["t"] < 16.2)
+    assert np.mean(sim["i_a"][win]) == pytest.approx((700.0 + g * i_hand) / (1 + g), rel=0.005)
+    assert np.all(sim["w_m"][win] > 0)  # the kiln still turns forward (the derivation's premise)
+
+
+def test_encoder_speed_is_whole_counts_per_window():
+    # truth (hand): the encoder reports (whole counts) * 2 pi / (ppr T_w): every logged speed is a multiple of it,
+    # and over many windows the counts average to the true speed
+    fr = _plant()
+    spec = fr.PlantSpec("t_e", 10.0, 50.0, base=dict(mu_s=0.4, mu_c=0.4), effects={"encoder": {"T_w": 0.006, "ppr": 4096}})
+    sim = fr.simulate_plant(spec, h=1e-3)
+    q = 2 * math.pi / (4096 * 0.006)
+    k = sim["w_s"] / q
+    np.testing.assert_allclose(k, np.round(k), atol=1e-6)
+    late = sim["t"] > 8.0
+    assert np.mean(sim["w_s"][late]) == pytest.approx(np.mean(sim["w_m"][late]), abs=q / 10)
+
+
+def test_logged_drift_quantisation_and_dropout():
+    # truth (hand): the drift adds rate * (time since the trigger) to the same noisy samples; the ADC leaves
+    # multiples of q; the dropout repeats the sample before it
+    fr = _plant()
+    kw = dict(base=dict(mu_s=0.4, mu_c=0.4), pre_s=0.5, h=2e-3)
+    plain = fr.logged(fr.PlantSpec("t_log", 3.0, 50.0, **kw))
+    drift = fr.logged(fr.PlantSpec("t_log", 3.0, 50.0, effects={"idrift": {"rate": 0.75}}, **kw))
+    np.testing.assert_allclose(drift["i"] - plain["i"], 0.75 * (plain["t"] + 0.5), atol=1e-9)
+    q = fr.logged(fr.PlantSpec("t_log", 3.0, 50.0, effects={"adc": {"q": 10.0}, "dropout": {"t": 1.0, "dur": 0.5}}, **kw))
+    np.testing.assert_allclose(q["i"] / 10.0, np.round(q["i"] / 10.0), atol=1e-9)
+    held = (plain["t"] >= 1.0) & (plain["t"] < 1.5)
+    k0 = np.flatnonzero(held)[0] - 1
+    assert np.all(q["n"][held] == plain["n"][k0]) and np.all(q["i"][held] == q["i"][k0])
+    assert held.sum() == 25
