@@ -261,6 +261,28 @@ def test_a_one_sample_spike_within_the_limits_is_noted_and_an_impact_is_not():
     assert not [n for n in impacts.notes if "spike" in n]
 
 
+def test_a_logger_that_held_its_last_values_is_noted_and_quantised_or_resting_signals_are_not():
+    """Truth by construction: a start-up of kilnctl's generator whose current and speed hold one sample for 1.2 s
+    at 8 s (a logger's dropout, as in the red team's record f17); the same record with its current on 10 A
+    steps (a coarse converter: both channels never repeat together); and a record at rest whose speed reads
+    exactly 0 and whose current 0 A for its first second (an encoder and a converter that is off)."""
+    from kilnctl.measure.synthetic import make_record
+
+    m, _ = make_record((), seed=1, t_end=16.0)
+    cur, spd = m.current.copy(), m.speed.copy()
+    held = (m.t >= 8.0) & (m.t < 9.2)
+    k = int(np.argmax(held))
+    cur[held], spd[held] = cur[k], spd[k]
+    (note,) = [n for n in Measurement.from_arrays(m.t, cur, spd, m.speed_ref).notes if "repeat one sample" in n]
+    assert f"({m.t[k]:.2f}-{m.t[held][-1]:.2f} s)" in note and "for 1.18 s while the drive turns" in note
+    steps = Measurement.from_arrays(m.t, 10.0 * np.round(m.current / 10.0), m.speed, m.speed_ref)
+    assert not [n for n in steps.notes if "repeat one sample" in n]
+    rest = m.t < 1.0
+    cur0, spd0 = m.current.copy(), m.speed.copy()
+    cur0[rest], spd0[rest] = 0.0, 0.0
+    assert not [n for n in Measurement.from_arrays(m.t, cur0, spd0, m.speed_ref).notes if "repeat one sample" in n]
+
+
 def test_timestamps_of_one_second_resolution_give_the_error_and_no_numpy_warning(tmp_path):
     """Timestamps written to the second (a historian's default) repeat within a second: one DataError, no warning.
 

@@ -926,7 +926,7 @@ def _checked(arrays, lines, source, params, notes, row_word, labels=None, log=Fa
     _check_units(arrays, lines, source, params, row_word, labels, log)
     if not log:
         notes = tuple(notes) + tuple(_sampling_notes(t, dts, med, lines, row_word)) \
-            + tuple(_spike_notes(arrays, lines, row_word, labels))
+            + tuple(_spike_notes(arrays, lines, row_word, labels)) + tuple(_frozen_notes(t, arrays, lines, row_word))
     return Measurement(t=t, channels=arrays, source=source, lines=lines, notes=tuple(notes), row_word=row_word)
 
 
@@ -982,6 +982,40 @@ def _spike_notes(arrays, lines, row_word, labels) -> list[str]:
                    "a logger's glitch, or an event shorter than the sample step (a backlash impact sampled at "
                    "10 Hz)? A glitch lowers the fit % of every model (the record is compared as it is): correct it "
                    "if it is one")
+    return out
+
+
+#: a stretch where the current and the speed both repeat their previous sample exactly, the drive turning, for
+#: at least this long [s] and this many samples is named as a frozen logger
+FROZEN_S, FROZEN_SAMPLES = 0.2, 5
+
+
+def _frozen_notes(t, arrays, lines, row_word) -> list[str]:
+    """Say where the current and the speed both repeat one sample exactly while the drive turns (a logger that
+    held its last values: a dropped connection, a stalled trend buffer).  Measured noise never repeats in both
+    channels, even on a coarse converter's steps (the red team's record with 10 A steps and 6 A of noise: not
+    once outside its held stretch); at standstill an encoder's zero and a converter that is off can, so
+    stretches at zero speed are not named.  The samples are compared as they are."""
+    cur, spd = arrays.get("current_A"), arrays.get("speed_rpm")
+    if cur is None or spd is None or cur.size < FROZEN_SAMPLES + 1:
+        return []
+    same = (np.diff(cur) == 0) & (np.diff(spd) == 0) & (spd[1:] != 0)
+    out = []
+    k = 0
+    while k < same.size:
+        if not same[k]:
+            k += 1
+            continue
+        j = k
+        while j < same.size and same[j]:
+            j += 1
+        a, b = k, j  # samples a..b hold the value of sample a
+        if b - a >= FROZEN_SAMPLES and t[b] - t[a] >= FROZEN_S:
+            out.append(f"{row_word}s {int(lines[a])}-{int(lines[b])} ({t[a]:.2f}-{t[b]:.2f} s): the current and "
+                       f"the speed both repeat one sample ({float(cur[a]):.4g} A, {float(spd[a]):.4g} rpm) for "
+                       f"{t[b] - t[a]:.2f} s while the drive turns: a logger that held its last values? They are "
+                       "not measurements, but they are compared as they are: cut them out if they are")
+        k = j
     return out
 
 
