@@ -20,6 +20,14 @@ from kilnctl.measure import read_record
 N_GEAR = 1076.5  # paper, Table 1: total reduction motor to kiln
 
 
+def _sliding_current_by_hand(p, mu):
+    """Steady current of the foreign plant with the burden sliding at friction mu (mu_s = mu_c: it creeps at the
+    kinetic angle tan psi = mu R / L): (mu m g R cos psi + T_brg) / (n k_i) [A] (NOTES.md worked steady state)."""
+    psi = math.atan(mu * p["R"] / p["L"])
+    t_brg = p["mu_brg"] * p["P"] * math.cos(math.pi / 6) * (p["l_brg"] + p["k_brg"]) / 2
+    return (mu * p["m_v"] * p["g"] * p["R"] * math.cos(psi) + t_brg) / (p["n"] * p["k_i"])
+
+
 def _start_up(n=600, dt=0.05, seed=1):
     """A plausible start-up: ramp at 74 rpm/s to 500 rpm from t = 1 s, current rising to about 800 A."""
     rng = np.random.default_rng(seed)
@@ -123,10 +131,7 @@ def test_foreign_plant_steady_sliding_matches_the_hand_balance():
 
     spec = fr.PlantSpec("t_slide", 24.0, 50.0, base=dict(mu_s=0.4, mu_c=0.4))
     sim = fr.simulate_plant(spec, h=1e-3)
-    p = fr.TABLE1
-    psi = math.atan(0.4 * p["R"] / p["L"])
-    t_brg = p["mu_brg"] * p["P"] * math.cos(math.pi / 6) * (p["l_brg"] + p["k_brg"]) / 2
-    i_hand = (0.4 * p["m_v"] * p["g"] * p["R"] * math.cos(psi) + t_brg) / (p["n"] * p["k_i"])
+    i_hand = _sliding_current_by_hand(fr.TABLE1, 0.4)
     late = sim["t"] > 19.0
     assert np.mean(sim["i_a"][late]) == pytest.approx(i_hand, rel=0.01)
 
@@ -358,10 +363,7 @@ def test_field_weakening_raises_the_sliding_current_by_the_flux_ratio():
     fr = _plant()
     spec = fr.PlantSpec("t_fw", 24.0, 50.0, base=dict(mu_s=0.4, mu_c=0.4), effects={"field_weak": {"w_base": 350.0}})
     sim = fr.simulate_plant(spec, h=1e-3)
-    p = fr.TABLE1
-    psi = math.atan(0.4 * p["R"] / p["L"])
-    t_brg = p["mu_brg"] * p["P"] * math.cos(math.pi / 6) * (p["l_brg"] + p["k_brg"]) / 2
-    i_hand = (0.4 * p["m_v"] * p["g"] * p["R"] * math.cos(psi) + t_brg) / (p["n"] * p["k_i"])
+    i_hand = _sliding_current_by_hand(fr.TABLE1, 0.4)
     late = sim["t"] > 19.0
     assert np.mean(sim["i_a"][late]) == pytest.approx(i_hand * 500.0 / 350.0, rel=0.01)
 
