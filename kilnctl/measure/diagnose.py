@@ -1073,8 +1073,9 @@ class Diagnosis:
                       f"{-dbic_corr:.1f}" if ok_robust else
                       f"BIC improves but the record's current hunts and the model's cycle is in step with it, "
                       f"where any added parameter can tune the cycle's phase: the held-out part must be predicted "
-                      f"better by more than {self.min_holdout_gain:g} % or {self.holdout_z:g} standard errors, and "
-                      f"is not ({why})")
+                      f"better by more than {self.min_holdout_gain:g} %, or by more than {self.holdout_z:g} standard "
+                      f"errors with BIC falling also once the coloured noise is modelled, and is not ({why}; BIC "
+                      f"with the coloured noise modelled {dbic_corr:+.1f})")
         elif ok_bic and ok_robust:
             reason = (f"supported: {why}, but BIC with the coloured noise modelled falls by {-dbic_corr:.1f} "
                       f"(> {self.min_delta_bic:g}) and the held-out part is predicted no worse")
