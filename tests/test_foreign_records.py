@@ -345,7 +345,8 @@ def test_stribeck_and_gear_ripple_torques_in_the_right_hand_side():
 def test_gear_ripple_shows_at_the_tooth_passing_frequency():
     # truth (hand): at the set speed the kiln turns at 500 / n rpm, so 180 teeth pass at 180 * 500 / n / 60 Hz
     fr = _plant()
-    spec = fr.PlantSpec("t_g", 16.0, 50.0, base=dict(mu_s=0.4, mu_c=0.4), effects={"gear_ripple": {"a": 0.03, "Z": 180}})
+    spec = fr.PlantSpec("t_g", 16.0, 50.0, base=dict(mu_s=0.4, mu_c=0.4),
+                        effects={"gear_ripple": {"a": 0.03, "Z": 180}})
     sim = fr.simulate_plant(spec, h=2e-3)
     spec.effects = {}
     smooth = fr.simulate_plant(spec, h=2e-3)  # the same plant without the ripple: the difference is the ripple's
@@ -391,7 +392,8 @@ def test_encoder_speed_is_whole_counts_per_window():
     # truth (hand): the encoder reports (whole counts) * 2 pi / (ppr T_w): every logged speed is a multiple of it,
     # and over many windows the counts average to the true speed
     fr = _plant()
-    spec = fr.PlantSpec("t_e", 10.0, 50.0, base=dict(mu_s=0.4, mu_c=0.4), effects={"encoder": {"T_w": 0.006, "ppr": 4096}})
+    spec = fr.PlantSpec("t_e", 10.0, 50.0, base=dict(mu_s=0.4, mu_c=0.4),
+                        effects={"encoder": {"T_w": 0.006, "ppr": 4096}})
     sim = fr.simulate_plant(spec, h=1e-3)
     q = 2 * math.pi / (4096 * 0.006)
     k = sim["w_s"] / q
@@ -408,7 +410,8 @@ def test_logged_drift_quantisation_and_dropout():
     plain = fr.logged(fr.PlantSpec("t_log", 3.0, 50.0, **kw))
     drift = fr.logged(fr.PlantSpec("t_log", 3.0, 50.0, effects={"idrift": {"rate": 0.75}}, **kw))
     np.testing.assert_allclose(drift["i"] - plain["i"], 0.75 * (plain["t"] + 0.5), atol=1e-9)
-    q = fr.logged(fr.PlantSpec("t_log", 3.0, 50.0, effects={"adc": {"q": 10.0}, "dropout": {"t": 1.0, "dur": 0.5}}, **kw))
+    q = fr.logged(fr.PlantSpec("t_log", 3.0, 50.0, effects={"adc": {"q": 10.0}, "dropout": {"t": 1.0, "dur": 0.5}},
+                               **kw))
     np.testing.assert_allclose(q["i"] / 10.0, np.round(q["i"] / 10.0), atol=1e-9)
     held = (plain["t"] >= 1.0) & (plain["t"] < 1.5)
     k0 = np.flatnonzero(held)[0] - 1
