@@ -599,3 +599,17 @@ def test_base_values_far_from_the_setup_are_named_and_near_ones_are_not():
     near, _ = make_record((), seed=4, mismatch=("m_v",), mismatch_frac=0.05, t_end=16.0)
     assert 0.05 < SETUP_DRIFT
     assert not [c for c in Diagnosis(SETUP, candidates=()).fit(near).caveats_ if c.startswith("The final model's")]
+
+
+def test_the_caution_on_base_values_far_from_the_setup_reads_for_two_values():
+    # truth: constructed final values, m_v 49 % and J_v 36 % above the setup (the red team's field-weakening
+    # record), and mu_c 40 % below with m_v 49 % above
+    d = Diagnosis(SETUP)
+    d.final_calibration_ = SimpleNamespace(values_={"mu_c": SETUP.mu_c, "m_v": SETUP.m_v * 1.49,
+                                                    "J_v": SETUP.J_v * 1.36})
+    (text,) = d._drift_texts(SETUP)
+    assert "m_v = 8.64e+05 kg and J_v = 2.28e+06 kg*m^2 lie 49 % and 36 % above the setup's (5.8e+05 kg, " in text
+    d.final_calibration_ = SimpleNamespace(values_={"mu_c": SETUP.mu_c * 0.6, "m_v": SETUP.m_v * 1.49,
+                                                    "J_v": SETUP.J_v})
+    (text,) = d._drift_texts(SETUP)
+    assert "mu_c = 0.24 and m_v = 8.64e+05 kg lie 40 % below and 49 % above the setup's (0.4, 5.8e+05 kg)" in text

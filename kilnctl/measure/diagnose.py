@@ -804,7 +804,11 @@ class Diagnosis:
             return "" if u in ("-", "") else " " + u
 
         values = " and ".join(f"{k} = {v:.3g}{unit(k)}" for k, v, _ in far)
-        devs = " and ".join(f"{100 * abs(v / s0 - 1):.0f} % {'above' if v > s0 else 'below'}" for _, v, s0 in far)
+        sides = {"above" if v > s0 else "below" for _, v, s0 in far}
+        if len(sides) == 1:  # "49 % and 36 % above"
+            devs = " and ".join(f"{100 * abs(v / s0 - 1):.0f} %" for _, v, s0 in far) + f" {sides.pop()}"
+        else:
+            devs = " and ".join(f"{100 * abs(v / s0 - 1):.0f} % {'above' if v > s0 else 'below'}" for _, v, s0 in far)
         given = ", ".join(f"{s0:.3g}{unit(k)}" for k, _, s0 in far)
         verb = "lies" if len(far) == 1 else "lie"
         return [f"The final model's {values} {verb} {devs} the setup's ({given}). If the setup is right, the "
