@@ -37,7 +37,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import KilnctlError, ModelError, NotFittedError, close_matches_hint
-from ..params import SPECS, Parameters
+from ..params import Parameters
 from ..simulate import resolve_gains
 from .calibrate import Calibration, Smoothing, default_starts, holdout_masks
 from .compare import compare_run, level_caution
@@ -800,7 +800,7 @@ class Diagnosis:
             return []
 
         def unit(k):
-            u = SPECS[k].unit if k in SPECS else "-"
+            u = _unit(k)
             return "" if u in ("-", "") else " " + u
 
         values = " and ".join(f"{k} = {v:.3g}{unit(k)}" for k, v, _ in far)
