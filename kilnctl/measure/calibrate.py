@@ -232,7 +232,7 @@ class _Problem:
         self.smooth_n = 1  # moving-average width of the residual [samples] (see Calibration.fit, smoothing)
         self.deadline = None  # time.perf_counter() value after which no further trial is run
         self._limit = None  # wall time [s] above which a trial run counts as failed
-        self.step_window = None  # (t_min, t_max) [s]: an abrupt step of the current is part of the model
+        self.outside = None  # a change outside the catalogue fitted to the current (kilnctl.measure.outside)
         self.horizon_end = None  # record time [s] of the last fitted sample when the fit is on a shorter horizon
         self.t_act = measurement.t[active]
         self.cycles_from = None  # record time [s] from which the residual is phase-free (see cycle_residual)
@@ -276,25 +276,22 @@ class _Problem:
             self.last_error = f"trial run slower than {limit:.0f} s ({wall:.0f} s): counted as a failed run"
             return None
         self.walls.append(wall)
-        if self.step_window is not None:
-            self._add_step(run)
+        if self.outside is not None:
+            self._add_outside(run)
         return run
 
-    def _add_step(self, run: ModelRun) -> None:
-        """Add to the model's current the best step b H(t - tau) of its residual on the fitted samples,
-        tau inside ``step_window`` (variable projection: b and tau are fitted in closed form at every trial
-        of the others)."""
-        from .stats import best_step
-
+    def _add_outside(self, run: ModelRun) -> None:
+        """Add to the model's current the term ``outside`` fitted to its residual on the fitted samples
+        (variable projection: the term is fitted in closed form at every trial of the others)."""
         t = self.m.t[self.m.t >= self.exp.t0 - 1e-9]
         cur = run.outputs["current_A"]
         e = self.meas["current_A"] - cur
         sel = self.mask
-        step = best_step(t[sel], e[sel], t_min=self.step_window[0], t_max=self.step_window[1], intercept=False)
-        if step is None:
+        fitted = self.outside.fit(t[sel], e[sel])
+        if fitted is None:
             return
-        run.outputs["current_A"] = cur + step["size"] * (t >= step["t"])
-        run.step = step
+        run.outputs["current_A"] = cur + self.outside.shape(t, fitted)
+        run.outside = fitted
 
     def residual(self, run: ModelRun | None, mask=None) -> np.ndarray:
         mask = self.mask if mask is None else mask
@@ -772,12 +769,12 @@ class Calibration:
         ``scipy.optimize.least_squares``).  Structures are told apart by BIC
         differences of 10 on thousands of samples, i.e. cost changes of a
         few tenths of a per cent: finer convergence buys nothing.
-    abrupt_step : (float, float), optional
-        Add to the model a step b H(t - tau) of the current, tau between
-        these record times [s], b and tau fitted in closed form at every
-        trial (variable projection): the hypothesis of an abrupt change that
-        no model component describes (a load step, a process upset).  The
-        fitted step is ``step_`` and counts as two parameters in ``bic_``.
+    outside : CurrentStep or CurrentDrift, optional
+        Add to the model's current a change that no model component
+        describes (:mod:`kilnctl.measure.outside`: an abrupt step, a slow
+        drift), fitted in closed form at every trial (variable projection).
+        The fitted term is ``outside_`` and counts as its ``n_params``
+        parameters in ``bic_``.
     time_limit_s : float, optional
         Wall time of a fit [s]: after it, every further trial run counts as
         failed, so the local fits end at the best values found so far
@@ -824,12 +821,14 @@ class Calibration:
         The experiment simulated.
     message_ : str
         Optimizer status.
+    outside_ : dict or None
+        The fitted ``outside`` term (its ``fit``), or None.
     """
 
     def __init__(self, params: Parameters | None = None, parameters=DEFAULT_CALIBRATE, *,
                  model: str = "macro", effects=(), bounds: dict | None = None, scales="std",
                  t0: float | None = None, max_nfev: int = 40, diff_step: float = 1e-3, tol: float = 1e-4,
-                 time_limit_s: float | None = None, abrupt_step=None):
+                 time_limit_s: float | None = None, outside=None):
         self.params = Parameters() if params is None else params
         self.parameters = tuple(parameters)
         self.model = model
@@ -843,7 +842,7 @@ class Calibration:
         if time_limit_s is not None and not (isinstance(time_limit_s, (int, float)) and time_limit_s > 0):
             raise ModelError(f"time_limit_s = {time_limit_s!r} must be a positive number of seconds (or None)")
         self.time_limit_s = time_limit_s
-        self.abrupt_step = None if abrupt_step is None else (float(abrupt_step[0]), float(abrupt_step[1]))
+        self.outside = outside
 
     # --- helpers --------------------------------------------------------------------
     def _free(self) -> list[FreeParameter]:
@@ -959,7 +958,7 @@ class Calibration:
         free = self._free()
         space = _Space(free, params)
         prob = _Problem(measurement, exp, params, self.model, self.effects, scales, mask)
-        prob.step_window = self.abrupt_step
+        prob.outside = self.outside
         start_vals = {r: params[r] for r in space.reported}
         start_vals.update(init or {})
         starts = starts if isinstance(starts, Starts) else Starts(None if starts is None else tuple(starts),
@@ -1044,8 +1043,8 @@ class Calibration:
         self.fit_percent_ = prob.fits(best.run)
         self.rss_ = prob.rss(best.run)
         self.n_ = {c: int(prob.mask.sum()) for c in CHANNELS}
-        self.step_ = getattr(best.run, "step", None)
-        self.bic_ = bic(self.rss_, self.n_, p + (2 if self.abrupt_step is not None else 0))
+        self.outside_ = getattr(best.run, "outside", None)
+        self.bic_ = bic(self.rss_, self.n_, p + (self.outside.n_params if self.outside is not None else 0))
         self.cost_ = best.cost
         self.n_failed_ = prob.n_failed
         self.run_ = best.run

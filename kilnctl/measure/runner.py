@@ -41,16 +41,17 @@ class ModelRun:
         The simulator's mode switches (times relative to ``t0``).
     response : kilnctl.response.Response
         The raw simulation.
-    step : dict or None
-        An abrupt step added to the current by a calibration that allows one
-        (see :class:`~kilnctl.measure.calibrate.Calibration`, ``abrupt_step``).
+    outside : dict or None
+        A change outside the catalogue added to the current by a calibration
+        that allows one (see :class:`~kilnctl.measure.calibrate.Calibration`,
+        ``outside``).
     """
 
     t: np.ndarray
     outputs: dict
     events: list
     response: object
-    step: dict | None = None
+    outside: dict | None = None
 
 
 def _last_of_each_time(t) -> np.ndarray:

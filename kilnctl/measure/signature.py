@@ -172,7 +172,8 @@ def residual_signature(comp: Comparison, n: float, steady_from: float | None = N
     dict
         ``structured`` (bool), ``dominant_hz`` [Hz], ``peak_ratio``,
         ``rms_A`` [A], ``r2`` (variance explained by each regressor [-]),
-        ``strongest``, ``failing`` (texts), ``hint`` and ``text``.
+        ``strongest``, ``failing`` (texts), ``hint``, ``described`` (the
+        residual described, without the hint) and ``text`` (both).
     """
     ch = comp.channels["current_A"]
     e = ch.residual - ch.residual.mean()
@@ -253,12 +254,12 @@ def residual_signature(comp: Comparison, n: float, steady_from: float | None = N
         hint = "a local failure: " + fails[0]
     else:
         hint = "no structure beyond noise"
-    text = (f"current residual rms {ch.rms:.3g} A; dominant frequency {spec['dominant_hz']:.2f} Hz; "
-            f"sharpest spectral peak {spec['narrowband_hz']:.2f} Hz ({spec['narrowband_ratio']:.1f} x its "
-            "neighbours); variance explained by "
-            + ", ".join(f"{k} {100 * v:.0f} %" for k, v in sorted(r2.items(), key=lambda kv: -kv[1]))
-            + (f"; fails at {'; '.join(fails)}" if fails else "") + f". Suggests: {hint}.")
+    described = (f"current residual rms {ch.rms:.3g} A; dominant frequency {spec['dominant_hz']:.2f} Hz; "
+                 f"sharpest spectral peak {spec['narrowband_hz']:.2f} Hz ({spec['narrowband_ratio']:.1f} x its "
+                 "neighbours); variance explained by "
+                 + ", ".join(f"{k} {100 * v:.0f} %" for k, v in sorted(r2.items(), key=lambda kv: -kv[1]))
+                 + (f"; fails at {'; '.join(fails)}" if fails else ""))
     return {"structured": structured, "dominant_hz": spec["dominant_hz"], "peak_ratio": spec["peak_ratio"],
             "narrowband_hz": spec["narrowband_hz"], "narrowband_ratio": spec["narrowband_ratio"],
             "rms_A": ch.rms, "sigma_A": robust_sigma(ch.residual), "r2": r2, "strongest": strongest,
-            "failing": fails, "hint": hint, "text": text}
+            "failing": fails, "hint": hint, "described": described, "text": f"{described}. Suggests: {hint}."}
