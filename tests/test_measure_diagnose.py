@@ -434,6 +434,29 @@ def test_a_breakaway_a_few_milliseconds_off_is_timing_not_a_failure():
     assert not _timing_only(t, pulse, measured, np.abs(pulse - measured) > 50.0, limit=30.0)
 
 
+@pytest.mark.parametrize("dip, words", [(-30.0, "falls behind the model's for"), (30.0, "runs ahead of the model's for")])
+def test_a_speed_away_from_the_models_for_seconds_is_named_as_a_torque_the_model_lacks(dip, words):
+    """Truth by construction: the generator's record with its measured speed moved by 30 rpm for 2.5 s
+    (22-24.5 s, after the ramp) and compared with the plant's own values: the hint names that stretch, and a
+    torque the model lacks; the untouched record names nothing of the kind."""
+    import numpy as np
+
+    from kilnctl.measure import Measurement, compare
+    from kilnctl.measure.signature import residual_signature
+
+    m0, truth = make_record((), seed=4, t_end=30.0)
+    plant = SETUP.replace(**truth["plant"])
+    exp = m0.experiment(SETUP)
+    bump = dip * np.clip(np.minimum(m0.t - 22.0, 24.5 - m0.t) / 0.2, 0.0, 1.0)
+    m = Measurement.from_arrays(m0.t, m0.current, m0.speed + bump, m0.speed_ref, source="speed moved",
+                                params=SETUP)
+    sig = residual_signature(compare(m, plant), SETUP.n, steady_from=exp.steady_from)
+    assert sig["structured"] and sig["hint"].startswith(f"the measured speed {words}")
+    assert "from t = 22." in sig["hint"] and ("less torque" if dip < 0 else "more torque") in sig["hint"]
+    clean = residual_signature(compare(m0, plant), SETUP.n, steady_from=exp.steady_from)
+    assert "measured speed" not in clean["hint"]
+
+
 def test_fit_points_of_an_interval_equal_the_fit_gained_by_removing_it():
     """Truth: fit % computed from its definition (kilnctl.measure.stats.fit_percent) with and without the
     interval's residual."""
