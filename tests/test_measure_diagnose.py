@@ -13,6 +13,7 @@ import pytest
 
 from kilnctl import Parameters
 from kilnctl.errors import ModelError, NotFittedError
+from kilnctl.measure.cautions import drift_texts, effect_cautions, setup_cautions
 from kilnctl.measure.diagnose import Diagnosis
 from kilnctl.measure.evidence import variance_inflation
 from kilnctl.measure.synthetic import DEFAULT_GAINS, make_record
@@ -216,21 +217,21 @@ def test_caution_of_an_effect_without_a_period():
     # only the autocorrelation caution -- never a "0.00 of its period (inf s)" text (issue 12, item 4)
     m, _ = make_record((), seed=0, t_end=4.0)
     exp = _exp()
-    assert _selected("second_motor", -300.0)._caveats(m, exp, SETUP) == []
-    weak = _selected("second_motor", -4.0)._caveats(m, exp, SETUP)
+    assert effect_cautions(_selected("second_motor", -300.0), m, exp, SETUP) == []
+    weak = effect_cautions(_selected("second_motor", -4.0), m, exp, SETUP)
     assert weak == ["second_motor: the evidence is weak once the residual's autocorrelation is allowed for "
                     "(whitened dBIC -4.0 against the threshold -10); small effects (a few-millisecond sensor lag, "
                     "a stiff drive train) are often like this, but so is an effect that fits slow noise."]
     for name in ("second_motor", "viscous_drag", "backlash", "current_limit", "speed_sensor_lag",
                  "drivetrain_compliance", "torque_friction_law"):
-        for text in _selected(name, -4.0)._caveats(m, exp, SETUP):
+        for text in effect_cautions(_selected(name, -4.0), m, exp, SETUP):
             assert "period" not in text and "inf" not in text and " ." not in text
 
 
 def test_caution_of_an_effect_with_a_period():
     # truth: one kiln revolution at the set speed is 60 n / omega_ref = 60 * 1076.5 / 500 = 129 s (Table 1's
     # reduction); a record of 40 s is 40 / 129.2 = 0.31 of it
-    from kilnctl.measure.diagnose import caution_texts
+    from kilnctl.measure.cautions import caution_texts
     from kilnctl.measure.effects import CATALOGUE
 
     note = CATALOGUE["kiln_unbalance"].short_record_note
@@ -238,10 +239,10 @@ def test_caution_of_an_effect_with_a_period():
     assert period == pytest.approx(129.2, abs=0.1)
     m, _ = make_record((), seed=0, t_end=40.02)
     exp = _exp()
-    strong = _selected("kiln_unbalance", -300.0)._caveats(m, exp, SETUP)
+    strong = effect_cautions(_selected("kiln_unbalance", -300.0), m, exp, SETUP)
     assert strong == ["kiln_unbalance was selected on a record of 40 s, 0.31 of its period (129 s): there it is "
                       + note + ". A record longer than one period tells them apart."]
-    weak = _selected("kiln_unbalance", -4.0)._caveats(m, exp, SETUP)
+    weak = effect_cautions(_selected("kiln_unbalance", -4.0), m, exp, SETUP)
     assert weak == ["kiln_unbalance was selected on a record of 40 s, 0.31 of its period (129 s): there it is "
                     + note + "; its evidence is weak once the residual's autocorrelation is allowed for "
                     "(whitened dBIC -4.0). A record longer than one period tells them apart."]
@@ -288,9 +289,9 @@ def test_a_value_outside_the_usual_range_is_reported_in_words_not_refused():
 
     m, _ = make_record((), seed=0, t_end=4.0)
     d = _selected("second_motor", -300.0, {"J_m2": 8.0})
-    assert d._caveats(m, _exp(), SETUP) == ["second_motor: J_m2 = 8 kg*m^2, below the usual 10-45 kg*m^2 (a value "
+    assert effect_cautions(d, m, _exp(), SETUP) == ["second_motor: J_m2 = 8 kg*m^2, below the usual 10-45 kg*m^2 (a value "
                                             "outside the usual range is reported, not refused)"]
-    assert _selected("second_motor", -300.0, {"J_m2": 21.5})._caveats(m, _exp(), SETUP) == []
+    assert effect_cautions(_selected("second_motor", -300.0, {"J_m2": 21.5}), m, _exp(), SETUP) == []
     assert CATALOGUE["viscous_drag"].plausibility({"B_o": 3e7}) == [
         "B_o = 3e+07 N*m*s/rad, above the usual 2e+06-1e+07 N*m*s/rad"]
     # a range that is not in the parameter's unit (I_max as a fraction of the peak current) is not compared
@@ -409,9 +410,9 @@ def test_no_weak_evidence_caution_when_the_held_out_gain_is_significant():
     # (it takes a poor model's misfit for noise: +1544 for the torque law on torque law + compliance)
     m, _ = make_record((), seed=0, t_end=4.0)
     d = _selected("torque_friction_law", +1544.0)
-    assert len(d._caveats(m, _exp(), SETUP)) == 1
+    assert len(effect_cautions(d, m, _exp(), SETUP)) == 1
     d.rounds_[0][0].holdout_z = d.holdout_z + 0.5
-    assert d._caveats(m, _exp(), SETUP) == []
+    assert effect_cautions(d, m, _exp(), SETUP) == []
 
 
 def test_a_breakaway_a_few_milliseconds_off_is_timing_not_a_failure():
@@ -592,10 +593,9 @@ def test_a_current_logged_in_per_cent_of_its_rating_is_named_before_the_diagnosi
 
     m, _ = make_record(("second_motor",), seed=1, t_end=12.0)
     params = resolve_gains(SETUP)
-    d = Diagnosis(SETUP)
-    assert d._setup_cautions(m, params, m.experiment(params)) == []
+    assert setup_cautions(m, params, m.experiment(params)) == []
     pct = Measurement.from_arrays(m.t, m.current / 16.0, m.speed, m.speed_ref)
-    (only,) = d._setup_cautions(pct, params, pct.experiment(params))
+    (only,) = setup_cautions(pct, params, pct.experiment(params))
     assert only.startswith("the setup's model before calibration, current_A: fit ")
     assert float(only.split("signal spans ")[1].split(" times")[0]) == pytest.approx(16.0, rel=0.15)
     assert "per cent of the rating" in only and "not evidence of an effect" in only
@@ -615,7 +615,7 @@ def test_caution_when_a_rival_explains_the_record_about_as_well():
                                 "", 0.0, delta_bic_corrected=-250.0)
         d.rounds_ = [[win, rival]]
         d._added = {"viscous_drag": win}
-        return d._caveats(m, _exp(), SETUP)
+        return effect_cautions(d, m, _exp(), SETUP)
 
     close = diag(-495.0)
     assert len(close) == 1
@@ -641,7 +641,7 @@ def test_rival_caution_of_a_pair_is_given_once():
     d.selected_ = ["torque_friction_law", "second_motor"]
     d.rounds_ = [[win, result("torque_friction_law+viscous_drag", -893.0), result("second_motor", -895.0)]]
     d._added = {"torque_friction_law": win, "second_motor": win}
-    texts = d._caveats(m, _exp(), SETUP)
+    texts = effect_cautions(d, m, _exp(), SETUP)
     assert len(texts) == 1
     assert texts[0].startswith("torque_friction_law+second_motor was preferred to torque_friction_law+viscous_drag "
                                "by a BIC difference of only 7.0")
@@ -651,7 +651,7 @@ def test_base_values_far_from_the_setup_are_named_and_near_ones_are_not():
     # truth: two plants of the generator without any effect; one with its burden 40 % heavier than the setup
     # says (m_v), one with the usual few per cent off.  The calibrated m_v follows the plant, and only the first
     # diagnosis says that the final model lies far from the setup (the caution's threshold is 25 %).
-    from kilnctl.measure.diagnose import SETUP_DRIFT
+    from kilnctl.measure.cautions import SETUP_DRIFT
 
     heavy, truth = make_record((), seed=4, mismatch=("m_v",), mismatch_frac=0.4, t_end=16.0)
     plant_m_v = truth["plant"]["m_v"]
@@ -671,9 +671,9 @@ def test_the_caution_on_base_values_far_from_the_setup_reads_for_two_values():
     d = Diagnosis(SETUP)
     d.final_calibration_ = SimpleNamespace(values_={"mu_c": SETUP.mu_c, "m_v": SETUP.m_v * 1.49,
                                                     "J_v": SETUP.J_v * 1.36})
-    (text,) = d._drift_texts(SETUP)
+    (text,) = drift_texts(d, SETUP)
     assert "m_v = 8.64e+05 kg and J_v = 2.28e+06 kg*m^2 lie 49 % and 36 % above the setup's (5.8e+05 kg, " in text
     d.final_calibration_ = SimpleNamespace(values_={"mu_c": SETUP.mu_c * 0.6, "m_v": SETUP.m_v * 1.49,
                                                     "J_v": SETUP.J_v})
-    (text,) = d._drift_texts(SETUP)
+    (text,) = drift_texts(d, SETUP)
     assert "mu_c = 0.24 and m_v = 8.64e+05 kg lie 40 % below and 49 % above the setup's (0.4, 5.8e+05 kg)" in text

@@ -40,9 +40,10 @@ from ..errors import KilnctlError, ModelError, NotFittedError, close_matches_hin
 from ..params import Parameters
 from ..simulate import resolve_gains
 from .calibrate import Calibration, Smoothing, default_starts, holdout_masks
-from .compare import compare_run, level_caution
+from .compare import compare_run
 from .effects import CATALOGUE, DEFAULT_CALIBRATE, effect_components, grid_starts
 from .breakaways import breakaways
+from .cautions import caution_texts, effect_cautions, setup_cautions
 from .io import Measurement
 from .evidence import holdout_z, whitened_delta_bic
 from .oscillation import dominant_oscillation, matching_value
@@ -71,9 +72,6 @@ OSCILLATION_MATCH = 0.05
 #: and of the current model's J_v
 PHASE_STEPS, PHASE_SPAN = 7, 0.015
 INERTIA_STEPS, INERTIA_SPAN = 11, 0.1
-#: the final model's base values checked against the setup's, and the fraction [-] beyond which a caution says
-#: so (mu_s is left out: outside stick-slip only the breakaway shows it, and it is fitted loosely)
-DRIFT_CHECKED, SETUP_DRIFT = ("mu_c", "m_v", "J_v"), 0.25
 #: a stick-slip structure is searched again from the setup's base values when the current model's differ from
 #: them by more than this fraction [-] in any base parameter (a setup is usually off by a few per cent)
 SETUP_FAR = 0.1
@@ -440,7 +438,7 @@ class Diagnosis:
         else:
             base = base_cal.fit(m, experiment=exp, n_local=self.n_local + 1)
         say(f"baseline: {_fmt_fit(base.fit_percent_)} ({base.nfev_} runs)")
-        self.setup_cautions_ = self._setup_cautions(m, params, exp)
+        self.setup_cautions_ = setup_cautions(m, params, exp, self.model)
         for text in self.setup_cautions_:
             say(f"caution: {text}")
         # residual scales for the comparison of structures: the base's residual RMS per channel
@@ -562,7 +560,7 @@ class Diagnosis:
             self.unexplained_ = dict(self.signature_, structured=True, hint=change["text"],
                                      outside_change={k: v for k, v in change.items() if k != "text"},
                                      text=f"{change['text']}. The model's {self.signature_['described']}.")
-        self.caveats_ = list(self.setup_cautions_) + self._caveats(m, exp, params)
+        self.caveats_ = list(self.setup_cautions_) + effect_cautions(self, m, exp, params)
         self.standstill_ = standstill_offsets(m, exp)
         if self.standstill_:
             text = "; ".join(o["text"] for o in self.standstill_)
@@ -750,98 +748,6 @@ class Diagnosis:
             except KilnctlError:
                 outs.append(None)
         return outs
-
-    def _setup_cautions(self, m, params, exp) -> list[str]:
-        """Cautions when the setup's own model, before any calibration, explains less of a channel than the
-        record's mean (:func:`~kilnctl.measure.compare.level_caution`): a unit or setup
-        mismatch, which the calibration papers over with implausible values and effects then stand in for (a
-        current logged in per cent of its rating: the base calibrated to a fit of 0.3 %, then a kiln unbalance
-        of 4.4e5 N m was selected)."""
-        try:
-            run = run_model(params, m, exp, model=self.model)
-        except KilnctlError:
-            return []
-        active = m.t >= exp.t0 - 1e-9
-        texts = [level_caution(c, unit, m.channels[c][active], run.outputs[c]) for c, (_, unit) in CHANNELS.items()]
-        return [f"the setup's model before calibration, {text} Until that is resolved, the diagnosis below is not "
-                f"evidence of an effect." for text in texts if text is not None]
-
-    def _caveats(self, m, exp, params) -> list[str]:
-        """Warnings about selected effects whose evidence is weaker than the criteria suggest."""
-        out = []
-        span = float(m.t[-1] - exp.t0)
-        added = getattr(self, "_added", None)
-        if added is None:  # the round each effect was added in, found by its supported result
-            added = {}
-            for rnd in self.rounds_:
-                for c in rnd:
-                    if c.supported and c.effect not in added:
-                        added[c.effect] = c
-        judged = []
-        for name in self.selected_:
-            r = added.get(name)
-            if r is None:
-                continue
-            eff = CATALOGUE[name]
-            period = eff.period(params, exp.omega_ref) if eff.period is not None else None
-            # weak: neither the BIC with the coloured noise modelled nor a held-out gain of holdout_z standard
-            # errors confirms the plain BIC (the whitened BIC alone misjudges an effect added to a model that
-            # still misses much, e.g. the torque law whose misplaced breakaways it takes for noise)
-            corrected = r.delta_bic_corrected if not r.holdout_z > self.holdout_z else -math.inf
-            out += caution_texts(name, span, period, eff.short_record_note, corrected, self.min_delta_bic)
-            if not any(r is a for a in judged):  # a pair added both its effects: its rivals are named once
-                judged.append(r)
-                out += self._rival_texts(r)
-            for note in eff.plausibility(self.final_calibration_.values_):
-                out.append(f"{name}: {note} (a value outside the usual range is reported, not refused)")
-        return out + self._drift_texts(params)
-
-    def _drift_texts(self, params) -> list[str]:
-        """A caution when the final model's friction, burden mass or kiln inertia lies more than
-        :data:`SETUP_DRIFT` from the setup's value: the calibration may have made up for a difference the
-        catalogue lacks (a motor constant falling with speed raises the current as a heavier burden does)."""
-        setup = self._setup_values(params)
-        final = self.final_calibration_.values_
-        far = [(k, final[k], setup[k]) for k in DRIFT_CHECKED
-               if k in final and k in setup and setup[k] > 0 and abs(final[k] / setup[k] - 1.0) > SETUP_DRIFT]
-        if not far:
-            return []
-
-        def unit(k):
-            u = _unit(k)
-            return "" if u in ("-", "") else " " + u
-
-        values = " and ".join(f"{k} = {v:.3g}{unit(k)}" for k, v, _ in far)
-        sides = {"above" if v > s0 else "below" for _, v, s0 in far}
-        if len(sides) == 1:  # "49 % and 36 % above"
-            devs = " and ".join(f"{100 * abs(v / s0 - 1):.0f} %" for _, v, s0 in far) + f" {sides.pop()}"
-        else:
-            devs = " and ".join(f"{100 * abs(v / s0 - 1):.0f} % {'above' if v > s0 else 'below'}" for _, v, s0 in far)
-        given = ", ".join(f"{s0:.3g}{unit(k)}" for k, _, s0 in far)
-        verb = "lies" if len(far) == 1 else "lie"
-        return [f"The final model's {values} {verb} {devs} the setup's ({given}). If the setup is right, the "
-                f"calibration has made up for a difference the model lacks, which this diagnosis cannot name; if "
-                f"it is not, correct the setup."]
-
-    def _rival_texts(self, r) -> list[str]:
-        """A caution when another candidate of the round whose winner was ``r`` was supported too and its dBIC
-        lies within the BIC threshold of the winner's: the record then hardly tells the two apart (a constant
-        motor friction and a drag at nearly constant speed differ only during the ramp).  A rival whose
-        effects were all selected (in a later round) is none.  The winner has the lowest dBIC of the round's
-        supported candidates (:func:`_rank`), so a rival's gap is never negative."""
-        rnd = next((rd for rd in self.rounds_ if any(c is r for c in rd)), [])
-        kept = set(self.selected_) | set(r.effect.split("+"))
-        out = []
-        for c in rnd:
-            if c is r or not c.supported or set(c.effect.split("+")) <= kept:
-                continue
-            gap = c.delta_bic - r.delta_bic
-            if gap < self.min_delta_bic:
-                out.append(f"{r.effect} was preferred to {c.effect} by a BIC difference of only {gap:.1f} (dBIC "
-                           f"{r.delta_bic:+.1f} against {c.delta_bic:+.1f}; the threshold is {self.min_delta_bic:g}):"
-                           f" on this record the two change the current alike, and either may be the cause. A record "
-                           f"where they act differently (another ramp rate or set speed) decides.")
-        return out
 
     def _missing_oscillation(self, m, current, exp):
         """The record's oscillation after the ramp (:func:`~kilnctl.measure.oscillation.dominant_oscillation`)
@@ -1479,52 +1385,3 @@ def _schedule(effects, first_failure, new_effect=None, full=False):
     smoothing = Smoothing(tuple(widths) or (0.0,), later_s=tuple(widths[-1:]) if len(horizons) > 1 else None)
     separation = min([CATALOGUE[e].separation for e in effects] or [1.0])
     return sorted(float(h) for h in horizons), smoothing, separation
-
-
-def caution_texts(effect: str, span_s: float, period_s: float | None, short_record_note: str,
-                  delta_bic_corrected: float, min_delta_bic: float) -> list[str]:
-    """The cautions a user reads about one selected effect (empty when there is nothing to say).
-
-    Two things weaken the evidence for a selected effect: a record shorter
-    than the period of its signature (then only part of a cycle is seen, which
-    other causes also make) and a BIC gain that misses the threshold once the
-    residual's autocorrelation is allowed for.
-
-    Parameters
-    ----------
-    effect : str
-        Catalogue name of the effect.
-    span_s : float
-        Length of the record from the start of the experiment [s].
-    period_s : float or None
-        Period of the effect's signature [s]; None for an effect without one
-        (then no short-record caution).
-    short_record_note : str
-        What else makes the signature in a record shorter than a period.
-    delta_bic_corrected : float
-        delta BIC corrected for residual autocorrelation [-].
-    min_delta_bic : float
-        The BIC threshold of the diagnosis [-] (positive).
-
-    Returns
-    -------
-    list of str
-        At most one caution.
-    """
-    weak = not (delta_bic_corrected < -min_delta_bic)
-    short = period_s is not None and math.isfinite(period_s) and period_s > 0 and span_s < period_s
-    if short:
-        text = (f"{effect} was selected on a record of {span_s:.0f} s, {span_s / period_s:.2f} of its period "
-                f"({period_s:.0f} s)")
-        text += (f": there it is {short_record_note}" if short_record_note else
-                 ": only part of a cycle is seen, which other causes can also produce")
-        if weak:
-            text += (f"; its evidence is weak once the residual's autocorrelation is allowed for "
-                     f"(whitened dBIC {delta_bic_corrected:+.1f})")
-        return [text + ". A record longer than one period tells them apart."]
-    if weak:
-        return [f"{effect}: the evidence is weak once the residual's autocorrelation is allowed for "
-                f"(whitened dBIC {delta_bic_corrected:+.1f} against the threshold {-min_delta_bic:g}); small "
-                "effects (a few-millisecond sensor lag, a stiff drive train) are often like this, but so is an "
-                "effect that fits slow noise."]
-    return []
