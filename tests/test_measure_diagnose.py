@@ -333,7 +333,7 @@ def test_a_drifting_current_offset_is_not_taken_for_a_kiln_unbalance():
     m0, _ = make_record((), seed=21, mismatch=("mu_c", "m_v"), t_end=140.0, fs=10.0)
     cur = m0.current + 0.25 * (m0.t - m0.t[0])
     m = Measurement.from_arrays(m0.t, cur, m0.speed, m0.speed_ref, source="drift 0.25 A/s", params=SETUP)
-    d = Diagnosis(SETUP, candidates=["kiln_unbalance", "viscous_drag"]).fit(m)
+    d = Diagnosis(SETUP, candidates=["kiln_unbalance"]).fit(m)
     assert d.selected_ == []
     change = d.unexplained_["outside_change"]
     # (0.21 A/s: the base values, fitted before, lean on part of the line)
@@ -355,7 +355,7 @@ def test_a_kiln_unbalance_is_not_taken_for_a_drift(monkeypatch):
     tried = []
     fit = CurrentDrift.fit
     monkeypatch.setattr(CurrentDrift, "fit", lambda self, t, e: tried.append(t[-1]) or fit(self, t, e))
-    d = Diagnosis(SETUP, candidates=["kiln_unbalance", "viscous_drag"]).fit(m)
+    d = Diagnosis(SETUP, candidates=["kiln_unbalance"]).fit(m)
     assert tried  # the hypothesis was fitted
     assert d.selected_ == ["kiln_unbalance"]
     assert d.outside_change_ is None
