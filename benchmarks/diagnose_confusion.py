@@ -237,7 +237,8 @@ def _hard_one(job):
             "values": _clean(found), "oracle_values": _clean(oracle_values), "param_rel_err": _clean(rel),
             "truth": truth, "wall_s": wall, "cpu_s": cpu, "load": load, "oracle_wall_s": oracle_wall,
             "oracle_error": oracle_error,
-            "outside_change": _clean(getattr(d, "outside_change_", None)), "final_search": _clean(getattr(d, "final_search_", None)),
+            "outside_change": _clean(getattr(d, "outside_change_", None)),
+            "final_search": _clean(getattr(d, "final_search_", None)),
             "removed": [r.effect for r in getattr(d, "removed_", [])]}
 
 

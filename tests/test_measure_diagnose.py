@@ -289,8 +289,9 @@ def test_a_value_outside_the_usual_range_is_reported_in_words_not_refused():
 
     m, _ = make_record((), seed=0, t_end=4.0)
     d = _selected("second_motor", -300.0, {"J_m2": 8.0})
-    assert effect_cautions(d, m, _exp(), SETUP) == ["second_motor: J_m2 = 8 kg*m^2, below the usual 10-45 kg*m^2 (a value "
-                                            "outside the usual range is reported, not refused)"]
+    assert effect_cautions(d, m, _exp(), SETUP) == [
+        "second_motor: J_m2 = 8 kg*m^2, below the usual 10-45 kg*m^2 (a value outside the usual range is reported, "
+        "not refused)"]
     assert effect_cautions(_selected("second_motor", -300.0, {"J_m2": 21.5}), m, _exp(), SETUP) == []
     assert CATALOGUE["viscous_drag"].plausibility({"B_o": 3e7}) == [
         "B_o = 3e+07 N*m*s/rad, above the usual 2e+06-1e+07 N*m*s/rad"]
@@ -435,7 +436,8 @@ def test_a_breakaway_a_few_milliseconds_off_is_timing_not_a_failure():
     assert not _timing_only(t, pulse, measured, np.abs(pulse - measured) > 50.0, limit=30.0)
 
 
-@pytest.mark.parametrize("dip, words", [(-30.0, "falls behind the model's for"), (30.0, "runs ahead of the model's for")])
+@pytest.mark.parametrize("dip, words", [(-30.0, "falls behind the model's for"),
+                                        (30.0, "runs ahead of the model's for")])
 def test_a_speed_away_from_the_models_for_seconds_is_named_as_a_torque_the_model_lacks(dip, words):
     """Truth by construction: the generator's record with its measured speed moved by 30 rpm for 2.5 s
     (22-24.5 s, after the ramp) and compared with the plant's own values: the hint names that stretch, and a
