@@ -460,6 +460,30 @@ def test_a_speed_away_from_the_models_for_seconds_is_named_as_a_torque_the_model
     assert "measured speed" not in clean["hint"]
 
 
+def test_an_oscillation_the_model_lacks_is_given_as_multiples_of_the_shafts_speeds():
+    """Truth by construction: the generator's record with a 40 A ripple at 240 times the kiln's rotation added
+    to the measured current after the ramp (the tooth passing of Table 1's girth gear, 2 R_o / module = 240
+    teeth: 1.86 Hz at 500 rpm and n = 1076.5); the hint gives the order (within the spectrum's 0.1 Hz) and the
+    motor's multiple."""
+    import numpy as np
+
+    from kilnctl.measure import Measurement, compare
+    from kilnctl.measure.signature import residual_signature
+
+    m0, truth = make_record((), seed=4, t_end=40.0)
+    plant = SETUP.replace(**truth["plant"])
+    exp = m0.experiment(SETUP)
+    f_kiln = 500.0 / 60.0 / SETUP.n
+    ripple = 40.0 * np.sin(2 * np.pi * 240 * f_kiln * m0.t) * (m0.t >= exp.steady_from)
+    m = Measurement.from_arrays(m0.t, m0.current + ripple, m0.speed, m0.speed_ref, source="ripple", params=SETUP)
+    hint = residual_signature(compare(m, plant), SETUP.n, steady_from=exp.steady_from)["hint"]
+    assert hint.startswith("an oscillation near 1.8") or hint.startswith("an oscillation near 1.9"), hint
+    order = float(hint.split("and about ")[1].split(" ")[0])
+    assert abs(order - 240) <= 8
+    assert float(hint.split("; it is ")[1].split(" ")[0]) == pytest.approx(240 / SETUP.n, abs=0.01)
+    assert "(129 s a turn)" in hint
+
+
 def test_fit_points_of_an_interval_equal_the_fit_gained_by_removing_it():
     """Truth: fit % computed from its definition (kilnctl.measure.stats.fit_percent) with and without the
     interval's residual."""
