@@ -167,7 +167,10 @@ def finish(fig, title: str | None = None, caption: str | None = None, *, width: 
     """
     bottom = 0.0
     if title:  # tight_layout leaves room for the suptitle itself
-        fig.suptitle(title, fontsize=FONT["suptitle"])
+        # wrapped to the figure's width (a character is about 0.55 of the font size wide): a diagnosis' verdict
+        # as a title ran off both edges of the ranking figure
+        chars = max(40, int(fig.get_figwidth() * 72.0 / (0.55 * FONT["suptitle"])))
+        fig.suptitle("\n".join(textwrap.wrap(title, chars)), fontsize=FONT["suptitle"])
     if caption:
         lines = textwrap.wrap(caption, width)
         fig.text(0.01, 0.005, "\n".join(lines), ha="left", va="bottom", fontsize=FONT["caption"], color="0.2")
