@@ -88,7 +88,10 @@ def record_name(source) -> str:
     str
     """
     text = str(source)
-    return Path(text).name if ("/" in text or "\\" in text) else text
+    path = Path(text.replace("\\", "/"))
+    # a path (absolute, or a file name with its folder) gives its file name; a label with a slash in it ("drift
+    # 0.25 A/s", "kiln 2 / line B") is kept whole
+    return path.name if (path.is_absolute() or ("/" in text or "\\" in text) and path.suffix) else text
 
 
 def limit_line(ax, value: float, label: str, *, axis: str = "h", color=None, ls="--", lw=1.0):

@@ -43,7 +43,11 @@ def _check_labels(fig):
 
 def test_record_name_is_the_file_name():
     assert record_name("/data/plant/run 3.csv") == "run 3.csv"
+    assert record_name("data/run 3.csv") == "run 3.csv"
+    assert record_name("C:\\logs\\kiln2.csv") == "kiln2.csv"
+    assert record_name("/data/plant/run3") == "run3"
     assert record_name("synthetic") == "synthetic"
+    assert record_name("drift 0.25 A/s") == "drift 0.25 A/s"  # a label, not a path
 
 
 def test_root_locus_states_its_margins_and_has_no_interactive_hint(design, tmp_path):
