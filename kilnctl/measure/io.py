@@ -1000,22 +1000,15 @@ def _frozen_notes(t, arrays, lines, row_word) -> list[str]:
     if cur is None or spd is None or cur.size < FROZEN_SAMPLES + 1:
         return []
     same = (np.diff(cur) == 0) & (np.diff(spd) == 0) & (spd[1:] != 0)
+    # runs of repeats: same[a:b] all True, so samples a..b hold the value of sample a
+    edges = np.flatnonzero(np.diff(np.concatenate(([0], same.astype(np.int8), [0]))))
     out = []
-    k = 0
-    while k < same.size:
-        if not same[k]:
-            k += 1
-            continue
-        j = k
-        while j < same.size and same[j]:
-            j += 1
-        a, b = k, j  # samples a..b hold the value of sample a
+    for a, b in zip(edges[::2], edges[1::2]):
         if b - a >= FROZEN_SAMPLES and t[b] - t[a] >= FROZEN_S:
             out.append(f"{row_word}s {int(lines[a])}-{int(lines[b])} ({t[a]:.2f}-{t[b]:.2f} s): the current and "
                        f"the speed both repeat one sample ({float(cur[a]):.4g} A, {float(spd[a]):.4g} rpm) for "
                        f"{t[b] - t[a]:.2f} s while the drive turns: a logger that held its last values? They are "
                        "not measurements, but they are compared as they are: cut them out if they are")
-        k = j
     return out
 
 

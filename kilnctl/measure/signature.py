@@ -144,13 +144,14 @@ def _timing_only(t, measured, model, where, limit: float) -> bool:
     return False
 
 
-def _shaft_orders(f_hz: float, speed_rpm, t, n: float, steady_from: float | None) -> str:
+def _shaft_orders(f_hz: float, df_hz: float, speed_rpm, t, n: float, steady_from: float | None) -> str:
     """The frequency ``f_hz`` as multiples of the motor's and the kiln's rotation at the record's steady speed
     (its median from ``steady_from`` on), for the hint: "" when the drive does not turn steadily there.
 
     A vibration at a whole multiple of a shaft's speed comes from that shaft: a gear's tooth passing (the girth
-    gear's Z teeth at Z times the kiln's speed), a run-out.  The spectrum resolves 0.1 Hz (10 s segments), so
-    the order is given with its spread: about +-6 at 1.4 Hz on a kiln turning once in 129 s."""
+    gear's Z teeth at Z times the kiln's speed), a run-out.  The spectrum resolves ``df_hz`` (0.1 Hz with its
+    10 s segments), so the order is given with its spread, half that step: about +-6 on a kiln turning once in
+    129 s."""
     if steady_from is None:
         return ""
     steady = np.asarray(speed_rpm)[np.asarray(t) >= steady_from]
@@ -158,7 +159,7 @@ def _shaft_orders(f_hz: float, speed_rpm, t, n: float, steady_from: float | None
         return ""
     f_motor = float(np.median(steady)) / 60.0
     f_kiln = f_motor / n
-    spread = 0.05 / f_kiln
+    spread = 0.5 * df_hz / f_kiln
     return (f"; it is {f_hz / f_motor:.2f} times the motor's rotation ({f_motor:.2f} Hz) and about "
             f"{f_hz / f_kiln:.0f} (+-{spread:.0f}) times the kiln's ({1.0 / f_kiln:.0f} s a turn): at a whole "
             f"multiple of a shaft's speed it comes from that shaft (a gear's tooth passing, a run-out)")
@@ -276,7 +277,7 @@ def residual_signature(comp: Comparison, n: float, steady_from: float | None = N
     if peaked and not correlated:
         hint = (f"an oscillation near {spec['narrowband_hz']:.2f} Hz: a resonance (torsional mode, burden "
                 f"pendulum near 0.34 Hz) or a loop that is less damped than modelled"
-                + _shaft_orders(spec["narrowband_hz"], speed, t, n, steady_from))
+                + _shaft_orders(spec["narrowband_hz"], float(spec["f"][1] - spec["f"][0]), speed, t, n, steady_from))
     elif correlated:
         hint = hints[strongest]
     elif apart is not None:
