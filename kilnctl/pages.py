@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 
-from .measure.report import esc, figure_block, report_page, table, write_page_files
+from .measure.report import esc, figure_block, png_bytes, report_page, table, write_page_files
 
 __all__ = ["verify_html", "write_verify_report", "ramp_html", "write_ramp_report"]
 
@@ -57,8 +57,8 @@ def verify_html(v, fig=None) -> str:
     ----------
     v : Verification
         The verification.
-    fig : matplotlib.figure.Figure, optional
-        Its figure, already drawn.
+    fig : matplotlib.figure.Figure or bytes, optional
+        Its figure, already drawn (or its PNG content).
 
     Returns
     -------
@@ -98,8 +98,8 @@ def write_verify_report(v, folder, protect=()) -> list:
     -------
     list of Path
     """
-    fig = v.plot()
-    return write_page_files(folder, "verify", verify_html(v, fig), v.to_dict(), {"verify.png": fig}, protect)
+    png = png_bytes(v.plot())  # rendered once: the page's image and the file are the same bytes
+    return write_page_files(folder, "verify", verify_html(v, png), v.to_dict(), {"verify.png": png}, protect)
 
 
 def ramp_html(result, fig=None) -> str:
@@ -109,8 +109,8 @@ def ramp_html(result, fig=None) -> str:
     ----------
     result : RampResult
         The optimization (:func:`kilnctl.optimize.optimize_ramp`).
-    fig : matplotlib.figure.Figure, optional
-        Its figure, already drawn.
+    fig : matplotlib.figure.Figure or bytes, optional
+        Its figure, already drawn (or its PNG content).
 
     Returns
     -------
@@ -175,6 +175,6 @@ def write_ramp_report(result, folder, protect=()) -> list:
     """
     from matplotlib.figure import Figure
 
-    fig = result.plot(fig=Figure(figsize=(10, 8.5)))
-    return write_page_files(folder, "optimize_ramp", ramp_html(result, fig), result.summary(),
-                            {"optimize_ramp.png": fig}, protect)
+    png = png_bytes(result.plot(fig=Figure(figsize=(10, 8.5))))
+    return write_page_files(folder, "optimize_ramp", ramp_html(result, png), result.summary(),
+                            {"optimize_ramp.png": png}, protect)

@@ -24,6 +24,7 @@ from __future__ import annotations
 import math
 import time
 from collections import Counter
+from collections.abc import Mapping
 
 import numpy as np
 
@@ -132,6 +133,31 @@ def _call_rows(t, t_end, dt, hmax) -> int:
     k0 = math.floor(t / dt * (1 + 1e-14)) + 1  # first grid index after t, as rosenbrock.c counts it
     left = math.floor(t_end * (1 + 1e-15) / dt) - k0 + 1 + 8
     return int(min(OUTPUT_BUFFER, max(left, math.ceil(2 * hmax / dt) + 1)))
+
+
+class _ModeArrays(Mapping):
+    """Mode of each moded component at each sample (component -> array of str), spelled out when first read.
+
+    A calibration runs the model thousands of times and reads only its outputs: the label arrays (one string
+    per sample and component) cost more than the rest of the run's bookkeeping, so each is built on its
+    first access from the segments' mode codes and lengths, then kept.
+    """
+
+    def __init__(self, labels: dict, seg_mode, seg_len):
+        self._labels, self._seg_mode, self._seg_len = labels, seg_mode, seg_len
+        self._arrays = {}
+
+    def __getitem__(self, name):
+        if name not in self._arrays:
+            # each segment's label repeated over its samples: the same as labels[code], without a gather per sample
+            self._arrays[name] = np.repeat(self._labels[name][self._seg_mode], self._seg_len)
+        return self._arrays[name]
+
+    def __iter__(self):
+        return iter(self._labels)
+
+    def __len__(self):
+        return len(self._labels)
 
 
 class _Engine:
@@ -638,12 +664,8 @@ def simulate(params: Parameters | None = None, model: str = "macro", t_end: floa
     wall = time.perf_counter() - wall0
     build = plant.build_seconds - build0
     modes = {v: k for k, v in eng.mode_index.items()}
-    mode_arrays = {}
-    seg_mode = np.array(eng.seg_mode, dtype=np.intp)
-    for ci, c in enumerate(plant.moded):
-        labels = np.array([modes[i][ci] for i in range(len(modes))])
-        # label of each segment repeated over its samples: the same as labels[code], without a gather per sample
-        mode_arrays[c.name] = np.repeat(labels[seg_mode], eng.seg_len)
+    labels = {c.name: np.array([modes[i][ci] for i in range(len(modes))]) for ci, c in enumerate(plant.moded)}
+    mode_arrays = _ModeArrays(labels, np.array(eng.seg_mode, dtype=np.intp), np.array(eng.seg_len, dtype=np.intp))
     return Response(
         t=T,
         outputs=dict(zip(plant.output_names, Y)),

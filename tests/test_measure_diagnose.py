@@ -65,6 +65,12 @@ def test_report_is_one_self_contained_page(second_motor_report):
     html = (folder / "diagnose.html").read_text()
     assert html.count("data:image/png;base64,") == 2 and 'src="http' not in html
     assert {p.name for p in files} >= {"diagnose.html", "diagnose.json"}
+    # truth: the PNG files written beside the page; each figure is drawn once, so the page shows those bytes
+    import base64
+    import re
+
+    inline = [base64.b64decode(b) for b in re.findall(r'src="data:image/png;base64,([^"]+)"', html)]
+    assert inline == [(folder / n).read_bytes() for n in ("diagnose_signals.png", "diagnose_ranking.png")]
 
 
 def test_nothing_hidden_selects_nothing():

@@ -29,7 +29,7 @@ __all__ = ["figure_tag", "table", "page", "write_report_files", "esc", "json_num
            "diagnosis_html", "write_diagnosis_report", "write_comparison_report", "comparison_html",
            "diagnosis_plain_headline", "uncertainty_words", "how_to_read", "settings_table", "parameter_table",
            "figure_block", "record_name_of", "HOW_TO_READ", "pretty_unit", "value_pair", "png_bytes", "write_page_files",
-           "report_page", "candidate_dict", "candidate_verdict", "greedy_order", "round_model", "SUMMARY_WIDTH"]
+           "render_pngs", "report_page", "candidate_dict", "candidate_verdict", "greedy_order", "round_model", "SUMMARY_WIDTH"]
 
 _CSS = """
 *{box-sizing:border-box}
@@ -62,8 +62,10 @@ def figure_tag(fig, alt: str = "figure") -> str:
 
     Parameters
     ----------
-    fig : matplotlib.figure.Figure
-        The figure.
+    fig : matplotlib.figure.Figure or bytes
+        The figure, or its PNG file content already rendered (a page that
+        also writes the figure as a file renders it once, see
+        :func:`write_page_files`).
     alt : str
         Alternative text.
 
@@ -71,7 +73,7 @@ def figure_tag(fig, alt: str = "figure") -> str:
     -------
     str
     """
-    data = base64.b64encode(png_bytes(fig, dpi=90)).decode("ascii")
+    data = base64.b64encode(fig if isinstance(fig, bytes) else png_bytes(fig, dpi=90)).decode("ascii")
     return f'<img alt="{esc(alt)}" src="data:image/png;base64,{data}">'
 
 
@@ -188,6 +190,26 @@ def write_report_files(folder, files: dict, protect=()) -> list[Path]:
     return written
 
 
+def render_pngs(figures: dict, dpi: float = 110) -> dict:
+    """Render figures to PNG content once, for a page's inline images and its PNG files alike.
+
+    Drawing a figure (its tight layout, every text's extent) costs about as much as the rest of a report page:
+    rendered once, the same bytes go into the page (:func:`figure_tag`) and into the file.
+
+    Parameters
+    ----------
+    figures : dict of str to matplotlib.figure.Figure or bytes
+        Name -> figure (content already rendered is kept as it is).
+    dpi : float, default 110
+        Resolution [dots per inch].
+
+    Returns
+    -------
+    dict of str to bytes
+    """
+    return {name: fig if isinstance(fig, bytes) else png_bytes(fig, dpi) for name, fig in figures.items()}
+
+
 def write_page_files(folder, stem: str, html_text: str, data: dict, figures: dict, protect=(), dpi: float = 110
                      ) -> list[Path]:
     """Write a report page ``STEM.html``, its numbers ``STEM.json`` and its figures as PNG, each whole or not at all.
@@ -202,8 +224,9 @@ def write_page_files(folder, stem: str, html_text: str, data: dict, figures: dic
         The page (:func:`report_page`).
     data : dict
         JSON-ready numbers of the page.
-    figures : dict of str to matplotlib.figure.Figure
-        PNG file name -> figure.
+    figures : dict of str to matplotlib.figure.Figure or bytes
+        PNG file name -> figure, or its PNG content already rendered (by
+        :func:`render_pngs`, the same bytes the page holds inline).
     protect : sequence of path-like
         Input files never to overwrite.
     dpi : float, default 110
@@ -214,7 +237,7 @@ def write_page_files(folder, stem: str, html_text: str, data: dict, figures: dic
     list of Path
         The page, the JSON file, then the figures.
     """
-    pngs = {name: png_bytes(fig, dpi) for name, fig in figures.items()}
+    pngs = render_pngs(figures, dpi)
     return write_report_files(folder, {f"{stem}.html": html_text, f"{stem}.json": data, **pngs}, protect=protect)
 
 
@@ -929,8 +952,8 @@ def figure_block(fig, alt: str, caption: str = "") -> str:
 
     Parameters
     ----------
-    fig : matplotlib.figure.Figure
-        The figure.
+    fig : matplotlib.figure.Figure or bytes
+        The figure, or its PNG content.
     alt : str
         Alternative text.
     caption : str
@@ -1020,7 +1043,8 @@ def diagnosis_html(d, figs=None) -> str:
     d : Diagnosis
         A fitted diagnosis.
     figs : dict, optional
-        Figures already drawn (name -> Figure): the signals, then the ranking.
+        Figures already drawn (name -> Figure or its PNG content): the
+        signals, then the ranking.
 
     Returns
     -------
@@ -1111,8 +1135,8 @@ def write_diagnosis_report(d, folder, protect=()) -> list:
     list of Path
         Files written (each whole or not at all).
     """
-    figs = {"diagnose_signals.png": plot_diagnosis(d), "diagnose_ranking.png": plot_ranking(d)}
-    return write_page_files(folder, "diagnose", diagnosis_html(d, figs), diagnosis_dict(d), figs, protect, dpi=100)
+    figs = render_pngs({"diagnose_signals.png": plot_diagnosis(d), "diagnose_ranking.png": plot_ranking(d)}, dpi=100)
+    return write_page_files(folder, "diagnose", diagnosis_html(d, figs), diagnosis_dict(d), figs, protect)
 
 
 # --- comparison ------------------------------------------------------------------------------------
@@ -1123,8 +1147,8 @@ def comparison_html(c, fig=None) -> str:
     ----------
     c : Comparison
         A comparison of a model with a record.
-    fig : matplotlib.figure.Figure, optional
-        Its figure, already drawn.
+    fig : matplotlib.figure.Figure or bytes, optional
+        Its figure, already drawn (or its PNG content).
 
     Returns
     -------
@@ -1181,5 +1205,5 @@ def write_comparison_report(c, folder, protect=()) -> list:
     list of Path
         Files written (each whole or not at all).
     """
-    fig = c.plot()
-    return write_page_files(folder, "compare", comparison_html(c, fig), c.to_dict(), {"compare.png": fig}, protect)
+    png = png_bytes(c.plot())
+    return write_page_files(folder, "compare", comparison_html(c, png), c.to_dict(), {"compare.png": png}, protect)
