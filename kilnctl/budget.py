@@ -94,7 +94,8 @@ def run_bytes(samples: int, n_states: int, n_outputs: int, n_moded: int) -> int:
 
     Per sample: time and mode code, the scaled states (recorded, then
     concatenated), the outputs, the states in physical units, and one short
-    mode label per moded component.
+    mode label per moded component (spelled out when the response's
+    ``modes`` are first read: counted, since a plot or a CSV reads them).
 
     Parameters
     ----------

@@ -33,15 +33,18 @@ def test_estimate_counts_the_samples_a_run_records(model, t_end):
 
 
 def test_memory_estimate_matches_the_measured_peak():
-    # independent truth: tracemalloc's peak of the run (numpy reports its buffers to tracemalloc)
+    # independent truth: tracemalloc's peak of the run with its mode labels read (they are spelled out when
+    # first read; numpy reports its buffers to tracemalloc)
     simulate(model="macro", t_end=1.0)  # plant built and compiled outside the measurement
     tracemalloc.start()
     try:
         r = simulate(model="macro", t_end=20.0)
+        labels = list(r.modes.values())
         _, peak = tracemalloc.get_traced_memory()
     finally:
         tracemalloc.stop()
     est = run_bytes(len(r.t), *_sizes("macro"))
+    assert len(labels) == _sizes("macro")[2] and all(len(v) == len(r.t) for v in labels)
     assert 0.7 < peak / est < 1.3
 
 
