@@ -16,12 +16,14 @@ $(STAMP): pyproject.toml
 demo: $(STAMP)
 	MPLBACKEND=Agg $(PY) -m kilnctl.demo --out out
 
-# the whole suite (what CI runs); test-fast skips the tests marked slow (each > ~10 s) while iterating
+# the whole suite (what CI runs); test-fast skips the tests marked slow (each > ~10 s) while iterating.
+# Two processes (pytest-xdist), each taking whole test files: CI has two cores
+XDIST := -n 2 --dist loadfile
 test: $(STAMP) chromium
-	MPLBACKEND=Agg $(PY) -m pytest
+	MPLBACKEND=Agg $(PY) -m pytest $(XDIST)
 
 test-fast: $(STAMP) chromium
-	MPLBACKEND=Agg $(PY) -m pytest -m "not slow"
+	MPLBACKEND=Agg $(PY) -m pytest $(XDIST) -m "not slow"
 
 # headless Chromium for the test that loads each report page (tests/test_report_pages.py): installed when
 # missing and we are root with apt-get; otherwise that test is skipped with the reason (never a failure here)
