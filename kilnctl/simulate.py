@@ -597,7 +597,7 @@ def simulate(params: Parameters | None = None, model: str = "macro", t_end: floa
         Largest number of output samples (``t_end/dt`` plus two per mode
         switch) the run may record; checked before anything runs.  Default:
         the environment variable ``KILNCTL_MAX_SAMPLES`` or 1 000 000 (about
-        0.5 GB for the micro model), see :mod:`kilnctl.budget`.
+        0.4 GB for the micro model), see :mod:`kilnctl.budget`.
 
     Returns
     -------

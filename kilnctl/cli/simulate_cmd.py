@@ -34,7 +34,7 @@ class SimulateCommand(Command):
                             help=f"simulated time [s] (default {DEFAULT_T_END:g})")
         parser.add_argument("--max-samples", type=int, default=None, metavar="N",
                             help="largest number of output samples (t_end/dt) the run may keep in memory, checked "
-                                 "before it starts (default 1000000, about 0.5 GB; or the environment variable "
+                                 "before it starts (default 1000000, about 0.4 GB; or the environment variable "
                                  "KILNCTL_MAX_SAMPLES)")
         parser.add_argument("--law", choices=SPECS["friction_law"].choices, default=None,
                             help="burden friction law: 'paper' (eq. 3 as printed) or 'torque' (torque-consistent); "
