@@ -21,6 +21,7 @@ __all__ = [
     "DataError",
     "NotFittedError",
     "OptimizationError",
+    "WorkerError",
     "close_matches_hint",
 ]
 
@@ -63,6 +64,10 @@ class NotFittedError(KilnctlError, RuntimeError):
 
 class OptimizationError(KilnctlError, RuntimeError):
     """An optimization failed or is infeasible: carries the solver status."""
+
+
+class WorkerError(KilnctlError, RuntimeError):
+    """A worker process of a parallel job ended abruptly: says the usual cause and the fix."""
 
 
 def close_matches_hint(name: str, known) -> str:

@@ -32,11 +32,12 @@ from __future__ import annotations
 import copy
 import math
 import time
+from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import KilnctlError, ModelError, NotFittedError, close_matches_hint
+from ..errors import KilnctlError, ModelError, NotFittedError, WorkerError, close_matches_hint
 from ..params import Parameters
 from ..simulate import resolve_gains
 from .calibrate import Calibration, Smoothing, default_starts, holdout_masks
@@ -457,6 +458,8 @@ class Diagnosis:
         pool = _pool(self.workers)
         try:
             return self._search(m, params, exp, base, scales, train, test, current, pool, say, wall0)
+        except BrokenProcessPool:
+            raise WorkerError(_BROKEN_POOL.format(workers=self.workers)) from None
         finally:
             if pool is not None:
                 pool.shutdown(wait=True, cancel_futures=True)
@@ -1278,6 +1281,13 @@ def _rank(r):
 
 #: relative cost of refitting a candidate (the micro model at 1 ms, stick-slip horizons): the slowest start first
 _COST_RANK = {"backlash": 4, "torque_friction_law": 3, "drivetrain_compliance": 2}
+
+
+#: what a worker process that ended abruptly most often means, and what to do
+_BROKEN_POOL = ("Diagnosis(workers={workers}): a worker process ended abruptly. Python starts each worker by importing "
+                "the script that runs the diagnosis: a script's own code must sit under `if __name__ == \"__main__\":` "
+                "(otherwise every worker runs the script again and stops). Otherwise a worker was killed (out of "
+                "memory?): run with workers=1 to see any error in this process.")
 
 
 def _pool(workers: int):

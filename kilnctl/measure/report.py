@@ -29,7 +29,8 @@ __all__ = ["figure_tag", "table", "page", "write_report_files", "esc", "json_num
            "diagnosis_html", "write_diagnosis_report", "write_comparison_report", "comparison_html",
            "diagnosis_plain_headline", "uncertainty_words", "how_to_read", "settings_table", "parameter_table",
            "figure_block", "record_name_of", "HOW_TO_READ", "pretty_unit", "value_pair", "png_bytes", "write_page_files",
-           "render_pngs", "report_page", "candidate_dict", "candidate_verdict", "greedy_order", "round_model", "SUMMARY_WIDTH"]
+           "render_pngs", "report_page", "candidate_dict", "candidate_verdict", "greedy_order", "round_model",
+           "SUMMARY_WIDTH"]
 
 _CSS = """
 *{box-sizing:border-box}
