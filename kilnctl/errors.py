@@ -69,6 +69,26 @@ class OptimizationError(KilnctlError, RuntimeError):
 class WorkerError(KilnctlError, RuntimeError):
     """A worker process of a parallel job ended abruptly: says the usual cause and the fix."""
 
+    @classmethod
+    def abrupt(cls, what: str, serial: str) -> "WorkerError":
+        """The error for a process pool whose worker ended abruptly (``BrokenProcessPool``).
+
+        Parameters
+        ----------
+        what : str
+            The call that used the pool, e.g. ``"Diagnosis(workers=2)"``.
+        serial : str
+            The argument that runs the same job in this process, e.g. ``"workers=1"``.
+
+        Returns
+        -------
+        WorkerError
+        """
+        return cls(f"{what}: a worker process ended abruptly. Python starts each worker by importing the script "
+                   "that runs the job: a script's own code must sit under `if __name__ == \"__main__\":` "
+                   "(otherwise every worker runs the script again and stops). Otherwise a worker was killed "
+                   f"(out of memory?): run with {serial} to see any error in this process.")
+
 
 def close_matches_hint(name: str, known) -> str:
     """Return a "did you mean ..." sentence for an unknown ``name``.

@@ -419,6 +419,13 @@ class Diagnosis:
         -------
         Diagnosis
             ``self``, fitted.
+
+        Raises
+        ------
+        WorkerError
+            With ``workers > 1``, a worker process ended abruptly (most
+            often: the calling script's code is not under
+            ``if __name__ == "__main__":``).
         """
         say = progress or (lambda s: None)
         wall0 = time.perf_counter()
@@ -459,7 +466,7 @@ class Diagnosis:
         try:
             return self._search(m, params, exp, base, scales, train, test, current, pool, say, wall0)
         except BrokenProcessPool:
-            raise WorkerError(_BROKEN_POOL.format(workers=self.workers)) from None
+            raise WorkerError.abrupt(f"Diagnosis(workers={self.workers})", "workers=1") from None
         finally:
             if pool is not None:
                 pool.shutdown(wait=True, cancel_futures=True)
@@ -1281,13 +1288,6 @@ def _rank(r):
 
 #: relative cost of refitting a candidate (the micro model at 1 ms, stick-slip horizons): the slowest start first
 _COST_RANK = {"backlash": 4, "torque_friction_law": 3, "drivetrain_compliance": 2}
-
-
-#: what a worker process that ended abruptly most often means, and what to do
-_BROKEN_POOL = ("Diagnosis(workers={workers}): a worker process ended abruptly. Python starts each worker by importing "
-                "the script that runs the diagnosis: a script's own code must sit under `if __name__ == \"__main__\":` "
-                "(otherwise every worker runs the script again and stops). Otherwise a worker was killed (out of "
-                "memory?): run with workers=1 to see any error in this process.")
 
 
 def _pool(workers: int):

@@ -18,10 +18,11 @@ import sys
 import threading
 import time
 from concurrent.futures import Future, ProcessPoolExecutor
+from concurrent.futures.process import BrokenProcessPool
 from concurrent.futures import as_completed as _local_as_completed
 from pathlib import Path
 
-from ..errors import KilnctlError, ParameterError
+from ..errors import KilnctlError, ParameterError, WorkerError
 from ..files import write_atomic
 from ..simulate import simulate
 
@@ -293,6 +294,9 @@ def run_sweep(study, executor=None, *, workers: int | None = None, cache=None, p
     SweepInterrupted
         (a :class:`KeyboardInterrupt`) on Ctrl-C, after the worker processes
         are ended; the finished points stay cached.
+    WorkerError
+        A local worker process ended abruptly (most often: the calling
+        script's code is not under ``if __name__ == "__main__":``).
     """
     from .result import SweepResult
 
@@ -325,6 +329,9 @@ def run_sweep(study, executor=None, *, workers: int | None = None, cache=None, p
                     if store is not None:
                         store.put(rec)
                     bar.update()
+        except BrokenProcessPool:
+            backend.close(futures, cancel=True)
+            raise WorkerError.abrupt(f"run_sweep of study {study.name!r} on {label}", "executor='serial'") from None
         except KeyboardInterrupt:
             backend.close(futures, cancel=True)
             done = sum(t["key"] in records for t in tasks)
