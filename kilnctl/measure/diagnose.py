@@ -19,7 +19,7 @@ The procedure (``docs/tutorial_diagnose.md``):
    errors.  Under coloured measurement noise an ordinary BIC counts every
    sample of a slow change as new evidence and picks spurious effects (a drift
    fitted by a kiln unbalance); a spurious effect gains nothing on the held-out
-   part;
+   part (the tests: :func:`~kilnctl.measure.evidence.judge`);
 5. add the supported candidate with the lowest BIC, and repeat (greedy) until
    no candidate is supported;
 6. refit the final structure on the whole record, and describe what is left
@@ -33,7 +33,6 @@ import copy
 import math
 import time
 from concurrent.futures.process import BrokenProcessPool
-from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -46,14 +45,14 @@ from .effects import CATALOGUE, DEFAULT_CALIBRATE, effect_components, grid_start
 from .breakaways import breakaways
 from .cautions import caution_texts, effect_cautions, setup_cautions
 from .io import Measurement
-from .evidence import holdout_z, whitened_delta_bic
+from .evidence import CandidateResult, judge
 from .oscillation import dominant_oscillation, matching_value
 from .outside import CurrentDrift, CurrentStep
 from .runner import CHANNELS, run_model
 from .signature import residual_signature, standstill_offsets
-from .stats import failing_intervals, fit_percent
+from .stats import failing_intervals
 from . import report as _report
-from .report import format_fit as _fmt_fit, json_number as _num, unit_of as _unit
+from .report import format_fit as _fmt_fit
 
 __all__ = ["Diagnosis", "CandidateResult", "residual_signature", "caution_texts", "DEFAULT_CALIBRATE"]
 
@@ -78,81 +77,6 @@ INERTIA_STEPS, INERTIA_SPAN = 11, 0.1
 SETUP_FAR = 0.1
 #: that search screens this many times as many starting points as it fits (see Calibration.fit, ``screen``)
 SCREEN = 2
-
-
-@dataclass
-class CandidateResult:
-    """One candidate effect refitted on the fitting part of the record.
-
-    Attributes
-    ----------
-    effect : str
-        Catalogue name.
-    delta_bic : float
-        BIC of the candidate minus BIC of the current model (fitting part);
-        negative favours the candidate.
-    holdout_gain : float
-        Reduction of the weighted squared error on the held-out part [%]
-        (positive: the candidate predicts unseen samples better).
-    fit_percent : dict
-        Fit % per channel on the fitting part.
-    holdout_fit_percent : dict
-        Fit % per channel on the held-out part.
-    parameters : dict
-        Fitted values with ``value``, ``stderr``, ``unit`` (effect and base).
-    on_bound, not_identifiable : list of str
-        Flags of the fitted parameters.
-    supported : bool
-        Both criteria met.
-    reason : str
-        Why it is (not) supported.
-    wall_s : float
-        Time the refit took [s].
-    heldout_share : float
-        Share of the candidate's change to the (scaled) model output that
-        falls in the held-out part [-].
-    delta_bic_corrected : float
-        delta BIC of the residuals whitened by an autoregressive model of the
-        better-fitting one's residual (feasible generalised least squares: the
-        coloured noise modelled).
-    holdout_z : float
-        The held-out gain in standard errors (which allow for the residual's
-        autocorrelation).
-    stand_in : bool
-        The refit improved the fit enough to be supported, but its values
-        contradict the effect's own signature (:attr:`Effect.contradicts`):
-        it stands in for another difference.
-    """
-
-    effect: str
-    delta_bic: float
-    holdout_gain: float
-    fit_percent: dict
-    holdout_fit_percent: dict
-    parameters: dict
-    on_bound: list
-    not_identifiable: list
-    supported: bool
-    reason: str
-    wall_s: float
-    calibration: Calibration | None = field(default=None, repr=False)
-    heldout_share: float = math.nan
-    delta_bic_corrected: float = math.nan
-    holdout_z: float = math.nan
-    stand_in: bool = False
-
-    def to_dict(self) -> dict:
-        """Return the result as a JSON-ready dictionary."""
-        return {"effect": self.effect, "delta_bic": _num(self.delta_bic), "holdout_gain_percent": _num(self.holdout_gain),
-                "fit_percent": {k: _num(v) for k, v in self.fit_percent.items()},
-                "holdout_fit_percent": {k: _num(v) for k, v in self.holdout_fit_percent.items()},
-                "parameters": {k: {"value": _num(v["value"]), "stderr": _num(v["stderr"]), "unit": v["unit"]}
-                               for k, v in self.parameters.items()},
-                "on_bound": list(self.on_bound), "not_identifiable": list(self.not_identifiable),
-                "supported": self.supported, "reason": self.reason, "wall_s": self.wall_s,
-                "heldout_share": _num(self.heldout_share), "delta_bic_corrected": _num(self.delta_bic_corrected),
-                "holdout_z": _num(self.holdout_z), "stand_in": self.stand_in}
-
 
 
 class Diagnosis:
@@ -960,87 +884,12 @@ class Diagnosis:
         return results
 
     def _evidence(self, m, name, cal, current, scales, train, test, exp, wall_s) -> CandidateResult:
-        """Judge a refitted candidate against the current model: delta BIC and the held-out gain."""
-        dbic = cal.bic_ - current.bic_
-        active = m.t >= exp.t0 - 1e-9
-        te = test[active]
-
-        def sse(run):
-            return sum(float(np.sum(((m.channels[c][active][te] - run.outputs[c][te]) / scales[c]) ** 2))
-                       for c in CHANNELS)
-
-        gain = 100.0 * (1.0 - sse(cal.run_) / max(sse(current.run_), 1e-300))
-        gain_z = holdout_z(m, cal, current, exp, te, scales)
-        hfit = {c: fit_percent(m.channels[c][active][te], cal.run_.outputs[c][te]) for c in CHANNELS}
-        # how much of the candidate's change to the model output falls in the held-out part
-        change = {c: ((cal.run_.outputs[c] - current.run_.outputs[c]) / scales[c]) ** 2 for c in CHANNELS}
-        total = sum(float(v.sum()) for v in change.values())
-        seen = sum(float(v[te].sum()) for v in change.values()) / total if total > 0 else 0.0
-        dbic_corr = whitened_delta_bic(m, cal, current, exp, train)
-        # the evidence: BIC on the fitting part, and the prediction of the samples the refit did not see.  An
-        # effect whose trace lies mostly in the fitting part (events: a torsional ring after each breakaway)
-        # gains little on the held-out part; it is supported when the BIC with the coloured noise modelled
-        # falls too (a slow change that only follows coloured noise does not) and the held-out part is not
-        # predicted significantly worse (an effect that only lines up the fitting part's events is)
-        ok_bic = dbic < -self.min_delta_bic
-        ok_gain = gain > self.min_holdout_gain
-        # ... a small held-out gain (under three times the threshold) that neither BIC with the coloured noise
-        # modelled nor its own spread bears out is the record's slowly correlated noise: on the independent plant's
-        # records a kiln unbalance of a sixth of the usual torque (a 100 Hz record, +2.5 %, 1.9 standard errors,
-        # whitened dBIC +11) and a second motor or an unbalance after a true compliance (+2.9-4.1 %, 1.0-1.1
-        # standard errors, +11-12) were added so.  A weak true unbalance (+8.5 %, 1.5 standard errors, whitened
-        # -0.4) still counts; so does a large gain whose whitened BIC rises because the better model still misses
-        # much (the torque law on a torque law + compliance record: +33 %, whitened +1857, plain -1209)
-        noise_like = (ok_gain and gain < 3.0 * self.min_holdout_gain and dbic_corr >= 0.0
-                      and gain_z <= self.holdout_z)
-        ok_gain = ok_gain and not noise_like
-        # not significantly worse on the held-out part (in standard errors that allow for its autocorrelation):
-        # a stick-slip structure fitted on the fitting blocks can predict the held-out blocks' breakaways a
-        # sample off, which doubles their squared error without being evidence against it (the torque friction
-        # law on a torque law + compliance record: -112 %, -1.6 standard errors, and needed)
-        ok_robust = dbic_corr < -self.min_delta_bic and gain_z > -self.holdout_z
-        # ... except when the record hunts and the current model's cycle runs at its frequency: the cycle's
-        # phase over the record moves with every parameter (on a 30 ms lag record a motor Coulomb friction of
-        # 1 N m, a fifth of an ampere, moved the cost by a third), so a refit with any added parameter tunes it
-        # and lowers BIC (-20 there) without predicting the held-out part better (+0.2 %, 0.6 standard errors)
-        hunting = self._cycle_in_phase(m, current, exp)
-        if hunting:
-            ok_robust = dbic_corr < -self.min_delta_bic and gain_z > self.holdout_z
-        why = f"held-out gain {gain:+.1f} % ({gain_z:+.1f} standard errors)"
-        if ok_bic and ok_gain:
-            reason = "BIC and held-out fit both improve"
-        elif ok_bic and hunting:
-            reason = (f"supported: {why}, significant, and BIC with the coloured noise modelled falls by "
-                      f"{-dbic_corr:.1f}" if ok_robust else
-                      f"BIC improves but the record's current hunts and the model's cycle is in step with it, "
-                      f"where any added parameter can tune the cycle's phase: the held-out part must be predicted "
-                      f"better by more than {self.min_holdout_gain:g} %, or by more than {self.holdout_z:g} standard "
-                      f"errors with BIC falling also once the coloured noise is modelled, and is not ({why}; BIC "
-                      f"with the coloured noise modelled {dbic_corr:+.1f})")
-        elif ok_bic and noise_like:
-            reason = (f"BIC improves and the held-out part is predicted slightly better ({why}), but neither bears "
-                      f"it out: BIC with the coloured noise modelled rises ({dbic_corr:+.1f}) and the held-out gain is "
-                      f"within {self.holdout_z:g} standard errors of none: likely the record's slowly correlated noise")
-        elif ok_bic and ok_robust:
-            reason = (f"supported: {why}, but BIC with the coloured noise modelled falls by {-dbic_corr:.1f} "
-                      f"(> {self.min_delta_bic:g}) and the held-out part is predicted no worse")
-        elif not ok_bic:
-            reason = f"BIC does not improve enough (dBIC {dbic:+.1f} >= {-self.min_delta_bic:g})"
-        else:
-            reason = (f"BIC improves but not out of sample ({why} <= {self.min_holdout_gain:g} %; BIC with the "
-                      f"coloured noise modelled {dbic_corr:+.1f}): likely fitting noise")
-        ok_gain = ok_gain or ok_robust
-        supported = ok_bic and ok_gain
-        eff = CATALOGUE.get(name)
-        odd = eff.contradicts(cal.values_, cal.params_) if supported and eff and eff.contradicts else None
-        if odd:  # the fit improves, but not by the effect's own signature (see Effect.contradicts)
-            supported = False
-            why_fit = reason[len("supported: "):] if reason.startswith("supported: ") else reason
-            reason = f"not the effect's signature: {odd} (its refit did improve the fit: {why_fit})"
-        pars = {k: {"value": cal.values_[k], "stderr": cal.stderr_[k], "unit": _unit(k)} for k in cal.names_}
-        return CandidateResult(name, float(dbic), float(gain), dict(cal.fit_percent_), hfit, pars,
-                               list(cal.on_bound_), list(cal.not_identifiable_), supported, reason,
-                               wall_s, cal, float(seen), float(dbic_corr), float(gain_z), bool(odd))
+        """Judge a refitted candidate against the current model (:func:`~kilnctl.measure.evidence.judge`) with
+        this diagnosis' thresholds; the hunting rule applies when the current model's cycle runs in step with
+        the record's."""
+        return judge(m, name, cal, current, scales, train, test, exp, wall_s, min_delta_bic=self.min_delta_bic,
+                     min_holdout_gain=self.min_holdout_gain, min_holdout_z=self.holdout_z,
+                     hunting=self._cycle_in_phase(m, current, exp))
 
     def _outside(self, m, params, selected, current, results, scales, train, test, exp, say):
         """Test the hypotheses of a change outside the catalogue against the round's best candidate.
