@@ -105,9 +105,10 @@ class Diagnosis:
         than this [-] ("very strong" evidence on Kass and Raftery's scale).
     min_holdout_gain : float, default 2.0
         ... and lower the held-out weighted squared error by more than this [%]
-        (a gain below three times this counts only where BIC with the
-        coloured noise modelled does not rise, or where it exceeds
-        ``holdout_z`` standard errors);
+        (where the current model fits the current to 90 % or better, a gain
+        below three times this counts only where BIC with the coloured noise
+        modelled does not rise, or where it exceeds ``holdout_z`` standard
+        errors);
     holdout_z : float, default 2.0
         ... or else, with BIC falling by more than ``min_delta_bic`` also
         when the residual's coloured noise is modelled (see
