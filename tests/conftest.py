@@ -1,4 +1,4 @@
-"""Shared test helpers: loading a report page in headless Chromium; a record of the foreign plant."""
+"""Shared test helpers: loading a report page in headless Chromium; a record of the foreign plant; a failing script."""
 
 import html
 import json
@@ -86,3 +86,16 @@ def foreign_stick_slip_record(folder, name, effects=None):
     setup = load_setup(Path(folder) / f"{name}.toml")
     m = read_record(truth["csv"], setup.params, columns=truth["columns"])
     return m, setup.params, truth
+
+
+def failing_script(folder, text: str) -> str:
+    """Run ``text`` as a script (``folder/script.py``, with this Python) that must fail; return the last line
+    of its standard error (the exception a user sees)."""
+    import sys
+
+    script = Path(folder) / "script.py"
+    script.write_text(text)
+    run = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=300, cwd=folder)
+    assert run.returncode != 0, run.stdout[-2000:]
+    return run.stderr.strip().splitlines()[-1]
+

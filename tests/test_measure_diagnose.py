@@ -98,21 +98,15 @@ def test_a_script_without_a_main_guard_gets_the_fix_not_a_broken_pool(tmp_path):
     # truth: Python's spawn start method imports the calling script in every worker; a script whose code is not
     # under `if __name__ == "__main__":` makes each worker stop at once, and the pool reports only
     # "BrokenProcessPool: A process in the process pool was terminated abruptly" (seen on a user's script).
-    import subprocess
-    import sys
+    from conftest import failing_script
 
-    script = tmp_path / "no_guard.py"
-    script.write_text("from kilnctl import Parameters\n"
-                      "from kilnctl.measure.diagnose import Diagnosis\n"
-                      "from kilnctl.measure.synthetic import DEFAULT_GAINS, make_record\n"
-                      "m, _ = make_record((), seed=1, t_end=8.0, fs=20.0)\n"
-                      "d = Diagnosis(Parameters(DEFAULT_GAINS), candidates=['viscous_drag', 'second_motor'],\n"
-                      "              workers=2)\n"
-                      "d.fit(m)\n")
-    run = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=300,
-                         cwd=tmp_path)
-    last = run.stderr.strip().splitlines()[-1]
-    assert run.returncode != 0
+    last = failing_script(tmp_path, "from kilnctl import Parameters\n"
+                                    "from kilnctl.measure.diagnose import Diagnosis\n"
+                                    "from kilnctl.measure.synthetic import DEFAULT_GAINS, make_record\n"
+                                    "m, _ = make_record((), seed=1, t_end=8.0, fs=20.0)\n"
+                                    "d = Diagnosis(Parameters(DEFAULT_GAINS), candidates=['viscous_drag', "
+                                    "'second_motor'], workers=2)\n"
+                                    "d.fit(m)\n")
     assert last.startswith("kilnctl.errors.WorkerError: Diagnosis(workers=2): a worker process ended abruptly")
     assert 'if __name__ == "__main__":' in last and "workers=1" in last
 

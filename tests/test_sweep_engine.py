@@ -194,16 +194,12 @@ def test_plots_of_each_space_kind():
 def test_a_script_without_a_main_guard_gets_the_fix_not_a_broken_pool(tmp_path):
     # truth: Python's spawn start method imports the calling script in every worker; a script whose code is not
     # under `if __name__ == "__main__":` makes each worker stop at once (the pool said only "BrokenProcessPool")
-    import subprocess
-    import sys
+    from conftest import failing_script
 
-    script = tmp_path / "no_guard.py"
-    script.write_text("from kilnctl.sweep import Grid, Study, run_sweep\n"
-                      "st = Study(Grid({'m_v': [5e5, 6e5]}), outputs=['peak_current_A'], model='macro', t_end=2.0)\n"
-                      "run_sweep(st, workers=2, progress=False, confirm=False)\n")
-    run = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=300,
-                         cwd=tmp_path)
-    last = run.stderr.strip().splitlines()[-1]
-    assert run.returncode != 0
-    assert last.startswith("kilnctl.errors.WorkerError: run_sweep of study") and "a worker process ended abruptly" in last
+    last = failing_script(tmp_path, "from kilnctl.sweep import Grid, Study, run_sweep\n"
+                                    "st = Study(Grid({'m_v': [5e5, 6e5]}), outputs=['peak_current_A'], "
+                                    "model='macro', t_end=2.0)\n"
+                                    "run_sweep(st, workers=2, progress=False, confirm=False)\n")
+    assert last.startswith("kilnctl.errors.WorkerError: run_sweep of study")
+    assert "a worker process ended abruptly" in last
     assert 'if __name__ == "__main__":' in last and "executor='serial'" in last
