@@ -959,9 +959,10 @@ class Diagnosis:
                     and (won is None or r.delta_bic < won[0].delta_bic)):
                 won = r, cal, term
             else:
+                verdict = (f"supported, but not better than {best.effect} by every test" if r.supported
+                           else "not supported")
                 say(f"  {label} (outside the catalogue)  dBIC {r.delta_bic:+10.1f} (whitened "
-                    f"{r.delta_bic_corrected:+8.1f})  held-out gain {r.holdout_gain:+6.1f} %  not better than "
-                    f"{best.effect} by every test")
+                    f"{r.delta_bic_corrected:+8.1f})  held-out gain {r.holdout_gain:+6.1f} %  {verdict}")
         if won is None:
             return None
         r, cal, term = won
