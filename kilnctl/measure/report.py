@@ -846,8 +846,10 @@ HOW_TO_READ = {
                                  "there; it must gain more than {min_holdout_gain:g} %. An effect whose trace lies "
                                  "mostly in the fitted part may instead pass with a BIC that also falls by more "
                                  "than {min_delta_bic:g} with the coloured noise modelled, and a held-out loss of "
-                                 "less than {holdout_z:g} standard errors. An effect is <b>supported</b> only when "
-                                 "it passes both tests."),
+                                 "less than {holdout_z:g} standard errors. Where the model already fits closely, "
+                                 "a small gain must also be borne out: by the whitened dBIC, or by more than "
+                                 "{holdout_z:g} standard errors. An effect is <b>supported</b> only when it passes "
+                                 "both tests."),
     "cautions": ("cautions", "Where the evidence is weaker than the numbers suggest (a record shorter than the "
                              "effect's period, a strongly autocorrelated residual, another effect that explains the "
                              "record about as well). Read them before acting."),
