@@ -954,18 +954,19 @@ class Diagnosis:
             # when it is better by every test a candidate is judged with.  By BIC alone a step at 25 s beat a
             # true kiln unbalance at 100 Hz (dBIC -602 against -584; whitened -31 against -10), which predicts
             # the held-out part better (+5.3 % against +3.3 %); true steps win by all three, by far
-            if (r.supported and r.delta_bic < best.delta_bic and r.delta_bic_corrected < best.delta_bic_corrected
-                    and r.holdout_gain > best.holdout_gain
-                    and (won is None or r.delta_bic < won[0].delta_bic)):
-                won = r, cal, term
-            else:
+            beats = (r.supported and r.delta_bic < best.delta_bic and r.delta_bic_corrected < best.delta_bic_corrected
+                     and r.holdout_gain > best.holdout_gain)
+            numbers = (f"dBIC {r.delta_bic:+10.1f} (whitened {r.delta_bic_corrected:+8.1f})  held-out gain "
+                       f"{r.holdout_gain:+6.1f} %")
+            if beats and (won is None or r.delta_bic < won[0].delta_bic):
+                won = r, cal, term, numbers
+            elif not beats:
                 verdict = (f"supported, but not better than {best.effect} by every test" if r.supported
                            else "not supported")
-                say(f"  {label} (outside the catalogue)  dBIC {r.delta_bic:+10.1f} (whitened "
-                    f"{r.delta_bic_corrected:+8.1f})  held-out gain {r.holdout_gain:+6.1f} %  {verdict}")
+                say(f"  {label} (outside the catalogue)  {numbers}  {verdict}")
         if won is None:
             return None
-        r, cal, term = won
+        r, cal, term, numbers = won
         fitted = cal.outside_
         text = term.text(fitted)
         for c in supported:
@@ -974,13 +975,12 @@ class Diagnosis:
                         f"{c.delta_bic:+.1f}): this effect only imitates part of it")
         if term.kind == "step":
             values = {"t": fitted["t"], "size_A": fitted["size"]}
-            say(f"  abrupt change at t = {fitted['t']:.1f} s  dBIC {r.delta_bic:+10.1f} (whitened "
-                f"{r.delta_bic_corrected:+8.1f})  held-out gain {r.holdout_gain:+6.1f} %  better than every candidate")
+            where = f"abrupt change at t = {fitted['t']:.1f} s"
         else:
             values = {"rate_A_per_s": fitted["rate"], "offset_A": fitted["offset"], "t_start": fitted["t_start"],
                       "t_end": fitted["t_end"]}
-            say(f"  slow drift of {fitted['rate']:+.2f} A/s  dBIC {r.delta_bic:+10.1f} (whitened "
-                f"{r.delta_bic_corrected:+8.1f})  held-out gain {r.holdout_gain:+6.1f} %  better than every candidate")
+            where = f"slow drift of {fitted['rate']:+.2f} A/s"
+        say(f"  {where}  {numbers}  better than every candidate")
         return dict(kind=term.kind, **values, delta_bic=r.delta_bic, text=text)
 
     def _reanchor(self, m, params, selected, current, results, scales, train, test, exp, say):
