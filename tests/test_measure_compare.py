@@ -262,6 +262,25 @@ def test_strategies_schedule_horizons_and_widths():
     assert [float(x[0]) for x in Starts(None, 3, 1.0).choose(u2, [9.0, 1.0, 2.0, 3.0])] == [0.0, 0.5, 3.0]
 
 
+def test_starts_spread_over_decades_add_the_best_point_of_each_decade_not_covered():
+    # truth: the documented rule, by hand.  The given point 3e9 (decade 9) and the best by cost, 1e9, are chosen
+    # as without a spread; the spread adds the best point of each other decade: 2e10 (cost 2) and, in decade 7,
+    # 5e7 (cost 3) rather than 2e7 (cost 8)
+    from kilnctl.measure.calibrate import Starts
+
+    pts = [{"k_po": 3e9}, {"k_po": 2e7}, {"k_po": 1e9}, {"k_po": 2e10}, {"k_po": 5e7}]
+    u = [np.array([np.log(p["k_po"])]) for p in pts]
+    costs = [9.0, 8.0, 1.0, 2.0, 3.0]
+    plain = Starts(None, 2, 1.0)
+    assert plain.decades(pts) is None
+    assert [float(np.exp(x[0])) for x in plain.choose(u, costs)] == pytest.approx([3e9, 1e9])
+    spread = Starts(None, 2, 1.0, spread="k_po")
+    assert spread.decades(pts) == [9, 7, 9, 10, 7]
+    assert spread.decades([{"k_po": 0.0}, {}]) == [None, None]
+    chosen = spread.choose(u, costs, spread.decades(pts))
+    assert [float(np.exp(x[0])) for x in chosen] == pytest.approx([3e9, 1e9, 2e10, 5e7])
+
+
 def test_report_folder_below_a_file_is_refused_before_the_work(tmp_path, capsys, monkeypatch):
     """``--report`` (compare, diagnose) and ``--out`` (split-startups) below a file: a clear error, before any work.
 

@@ -407,19 +407,37 @@ class Starts:
     separation : float
         Least distance (largest scaled-coordinate difference) between two
         chosen points [-]: 1 is a factor e for a log-scaled parameter.
+    spread : str or None
+        A parameter whose points are spread over its range: besides the
+        points chosen by cost, a local fit also runs from the best point of
+        each decade of it that no chosen point lies in.  Where the parameter
+        sets a mode's frequency, the cost at a starting point ranks by the
+        mode's phase, and the base values may have made up for the missing
+        mode: a soft drive train's stiffness 5 % off fits worse than a rigid
+        one, while a local fit from there ends at the record's noise
+        (see :attr:`~kilnctl.model.catalogue.Effect.spread`).
     """
 
     points: tuple | None = None
     n_local: int = 2
     separation: float = 1.0
+    spread: str | None = None
 
     def points_from(self, names, given: dict) -> list[dict]:
         """The given values, then each further point completed by them."""
         extra = default_starts(names, given) if self.points is None else list(self.points)
         return [dict(given)] + [dict(given, **p) for p in extra]
 
-    def choose(self, u0s, costs) -> list:
-        """The scaled points the local fits start from (``u0s[0]`` is the given one)."""
+    def decades(self, points) -> list | None:
+        """The decade (floor of log10) of :attr:`spread` at each point, None where it is not positive; None
+        without a spread."""
+        if self.spread is None:
+            return None
+        return [math.floor(math.log10(v)) if (v := float(p.get(self.spread, 0.0))) > 0 else None for p in points]
+
+    def choose(self, u0s, costs, decades=None) -> list:
+        """The scaled points the local fits start from (``u0s[0]`` is the given one); ``decades`` (from
+        :meth:`decades`): one more from the best point of each decade no chosen point lies in."""
         if len(u0s) <= 1:
             return list(u0s)
         order = np.argsort(costs, kind="stable")
@@ -434,6 +452,15 @@ class Starts:
                 chosen.append(int(i))
             if len(given) + len(chosen) >= max(1, self.n_local):
                 break
+        if decades is not None:
+            covered = {decades[j] for j in given + chosen}
+            for i in order:
+                if decades[i] is None or decades[i] in covered:
+                    continue
+                if any(np.max(np.abs(u0s[i] - u0s[j]), initial=0.0) <= 1e-12 for j in given + chosen):
+                    continue
+                covered.add(decades[i])
+                chosen.append(int(i))
         return [u0s[i] for i in given + chosen]
 
 
@@ -871,7 +898,8 @@ class Calibration:
     # --- estimator API --------------------------------------------------------------
     def fit(self, measurement: Measurement, mask=None, *, init: dict | None = None,
             starts=None, experiment: Experiment | None = None, horizons=(1.0,), n_local: int = 2,
-            separation: float = 1.0, smoothing=(0.0,), cycles: bool = False, screen: int = 1) -> "Calibration":
+            separation: float = 1.0, smoothing=(0.0,), cycles: bool = False, screen: int = 1,
+            spread: str | None = None) -> "Calibration":
         """Fit the parameters to a record.
 
         Parameters
@@ -938,6 +966,11 @@ class Calibration:
             stick-slip falls replaced by the time errors of the model's
             burden switches (:class:`~kilnctl.measure.breakaways.BreakawayTiming`;
             skipped when fewer than two falls are found after the ramp).
+        spread : str or None, default None
+            A parameter whose starting points are spread over its range
+            (see :class:`Starts`): one more local fit from the best point in
+            each decade of it that no chosen point lies in (not with
+            ``cycles``, whose screening already compares points apart).
         screen : int, default 1
             With ``cycles``: ``screen`` times ``n_local`` starting points, the
             best by the phase-free cost, are each run through the phase-free
@@ -962,7 +995,7 @@ class Calibration:
         start_vals = {r: params[r] for r in space.reported}
         start_vals.update(init or {})
         starts = starts if isinstance(starts, Starts) else Starts(None if starts is None else tuple(starts),
-                                                                  n_local, separation)
+                                                                  n_local, separation, spread)
         horizons = horizons if isinstance(horizons, Horizons) else Horizons(tuple(horizons))
         smoothing = smoothing if isinstance(smoothing, Smoothing) else Smoothing(tuple(smoothing))
         t_wall = time.perf_counter()
@@ -970,7 +1003,10 @@ class Calibration:
         search = _Search(prob, space, measurement.t[active], exp.t0, self.diff_step, self.max_nfev, self.tol)
         if cycles:
             search.cycles_from = exp.steady_from
-        u0s = [space.encode(v) for v in starts.points_from(space.reported, start_vals)]
+        points = starts.points_from(space.reported, start_vals)
+        u0s = [space.encode(v) for v in points]
+        # the spread over decades on costs without stick-slip cycles (their screening compares points apart)
+        decades = starts.decades(points) if not cycles else None
         search.set_horizon(horizons.schedule()[0])
         search.set_smoothing(smoothing.schedule()[0])
         if search.cycles_from is not None:
@@ -983,7 +1019,7 @@ class Calibration:
         costs = [search.trial(u).cost for u in u0s] if len(u0s) > 1 and starts.n_local > 0 else [0.0]
         wide = search.cycles_from is not None and starts.n_local > 0 and space.coords and screen > 1
         firsts = [] if starts.n_local == 0 else \
-            (replace(starts, n_local=screen * starts.n_local) if wide else starts).choose(u0s, costs)
+            (replace(starts, n_local=screen * starts.n_local) if wide else starts).choose(u0s, costs, decades)
         prob.cycles_from = None
         search.cache.clear()
         if wide:

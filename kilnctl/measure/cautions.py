@@ -155,7 +155,8 @@ def rival_texts(d, r) -> list[str]:
     lies within the BIC threshold of the winner's: the record then hardly tells the two apart (a constant
     motor friction and a drag at nearly constant speed differ only during the ramp).  A rival whose
     effects were all selected (in a later round) is none.  The winner has the lowest dBIC of the round's
-    supported candidates (``diagnose._rank``), so a rival's gap is never negative.
+    supported candidates (``diagnose._rank``), so a rival's gap is negative only where the swap check put
+    ``r`` in the place of the round's winner; that story is told with the removed effects, not here.
 
     Parameters
     ----------
@@ -175,7 +176,7 @@ def rival_texts(d, r) -> list[str]:
         if c is r or not c.supported or set(c.effect.split("+")) <= kept:
             continue
         gap = c.delta_bic - r.delta_bic
-        if gap < d.min_delta_bic:
+        if 0.0 <= gap < d.min_delta_bic:
             out.append(f"{r.effect} was preferred to {c.effect} by a BIC difference of only {gap:.1f} (dBIC "
                        f"{r.delta_bic:+.1f} against {c.delta_bic:+.1f}; the threshold is {d.min_delta_bic:g}):"
                        f" on this record the two change the current alike, and either may be the cause. A record "

@@ -435,10 +435,10 @@ def candidate_verdict(d, i: int, r) -> tuple[str, str]:
     Returns
     -------
     (str, str)
-        ``added``, ``added, then removed`` (by the backward check), ``supported, not added`` or
-        ``rejected``; and the reason: the candidate's own (:attr:`CandidateResult.reason`), with the
-        backward check's for a removed one, or, for a supported candidate the round did not add,
-        which one it added in its place.
+        ``added``, ``added, then removed`` (by the backward or the swap check), ``added by the swap
+        check``, ``supported, not added`` or ``rejected``; and the reason: the candidate's own
+        (:attr:`CandidateResult.reason`), with the backward or swap check's for a removed one, or, for a
+        supported candidate the round did not add, which one it added in its place.
     """
     rnd = d.rounds_[i]
     added = rnd[0].effect if rnd and rnd[0].supported else None
@@ -447,6 +447,10 @@ def candidate_verdict(d, i: int, r) -> tuple[str, str]:
         if r.effect in removed:
             return "added, then removed", f"{r.reason}; then {removed[r.effect].reason}"
         return "added", r.reason
+    swaps = getattr(d, "swaps_", None) or {}
+    if r.supported and r.effect in swaps and r.effect in d.selected_ and swaps[r.effect] == added:
+        return "added by the swap check", (f"{r.reason}; {added} had the lower dBIC and was added first, then "
+                                           f"replaced by {r.effect} in the swap check")
     if r.supported and added is not None:
         then = (f"tried again against it in round {i + 2}" if i + 1 < len(d.rounds_) else
                 f"at most {d.max_effects} effects are added")
@@ -628,9 +632,9 @@ def diagnosis_summary(d) -> str:
         lines += [x for r in rnd for x in _summary_rows(r, *candidate_verdict(d, i, r))]
     removed = getattr(d, "removed_", None) or []
     if removed:
-        lines += _wrap("effects added, then removed (by the backward check on the fitting part, or the final "
-                       "check on the whole record), each judged as if added to the model without it (the dBICs of "
-                       "keeping it)", "  ")
+        lines += _wrap("effects added, then removed (by the backward or the swap check on the fitting part, or "
+                       "the final check on the whole record), each judged as if added to the model without it, or "
+                       "with its replacement in its place (the dBICs of keeping it)", "  ")
         lines.append(head)
         lines += [x for r in removed for x in _summary_rows(r, "removed", r.reason)]
     lines += _wrap(f"selected: {', '.join(d.selected_) or 'nothing'}", "  ")
@@ -1081,13 +1085,13 @@ def diagnosis_html(d, figs=None) -> str:
         parts.append(f"<h3>Round {i + 1}: against " + esc(round_model(d, i, "the calibrated base")) + "</h3>")
         verdicts = [candidate_verdict(d, i, r) for r in rnd]
         rows = [_candidate_row(r, *v) for r, v in zip(rnd, verdicts)]
-        sel = {j for j, (v, _) in enumerate(verdicts) if v == "added"}
+        sel = {j for j, (v, _) in enumerate(verdicts) if v in ("added", "added by the swap check")}
         parts.append(table(header, rows, left=1, selected=sel, wrap=(5, 6)))
     removed = getattr(d, "removed_", None) or []
     if removed:
-        parts.append("<h3>Effects added, then removed</h3><p>By the backward check on the fitting part, or the "
-                     "final check on the whole record; each judged as if added to the model without it (the dBICs "
-                     "of keeping it).</p>")
+        parts.append("<h3>Effects added, then removed</h3><p>By the backward or the swap check on the fitting "
+                     "part, or the final check on the whole record; each judged as if added to the model without "
+                     "it, or with its replacement in its place (the dBICs of keeping it).</p>")
         parts.append(table(header, [_candidate_row(r, "removed", r.reason) for r in removed], left=1,
                            wrap=(5, 6)))
     # the whole account once, a sentence a paragraph; the warning at the top names what it suggests

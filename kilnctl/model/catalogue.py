@@ -120,6 +120,11 @@ class Effect:
         mode to show).  A candidate whose refit ends there is not supported:
         it stands in for a difference the catalogue may lack.  Physics, not a
         usual range: it holds for any magnitude.
+    spread : str or None
+        A parameter whose starting points are spread over its decades for
+        the local fits (:class:`~kilnctl.measure.calibrate.Starts`): where it
+        sets a mode's frequency, a start a few per cent off ranks below no
+        mode at all, and the base values may have made up for the effect.
     null : dict or None
         Values of its parameters at which the effect vanishes (or nearly:
         a lag of 0.1 ms), so that the structure with it contains the one
@@ -147,6 +152,7 @@ class Effect:
     null: dict | None = None
     relative_plausible: tuple = ()
     contradicts: Callable | None = field(repr=False, default=None)
+    spread: str | None = None
 
     def applicable(self, params: Parameters, model: str) -> str | None:
         """Return None if the effect can be added to this base, else the reason it cannot.

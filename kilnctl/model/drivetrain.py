@@ -159,7 +159,7 @@ class DrivetrainCompliance(Component):
             "a damped oscillation of the current at the torsional mode (about 1.5 Hz with Table 1) after each "
             "change of torque: ramp start, ramp end, burden breakaway",
             starts=lambda params, m: _compliance_starts(params),
-            plausible={"k_po": (5e7, 5e8), "C_po": (2e6, 2e7)}, grid_points=0, contradicts=_no_ring,
+            plausible={"k_po": (5e7, 5e8), "C_po": (2e6, 2e7)}, grid_points=0, contradicts=_no_ring, spread="k_po",
             notes="started from a grid in stiffness (fine: the mode frequency must match) times damping ratios "
                   "0.03-0.6 of the mode between the motor side and the kiln."),
     )
