@@ -732,6 +732,34 @@ def test_caution_when_a_rival_explains_the_record_about_as_well():
     assert diag(-495.0, rival_supported=False) == []
 
 
+def test_caution_when_a_rival_is_as_good_once_the_noise_correlation_is_modelled():
+    # truth: constructed rounds (the numbers of an independent plant's record with a second motor of 4 kg m^2,
+    # where a motor Coulomb friction won: dBIC -282.5 against -223.3, whitened -13.9 against -15.6).  The plain
+    # gap (59) is beyond the threshold, the whitened one (-1.7) within it -> one caution saying both; a rival
+    # whitened 30 worse -> none; a pair's rival is not said to have been tried in the swap check
+    from kilnctl.measure.diagnose import CandidateResult
+
+    m, _ = make_record((), seed=0, t_end=4.0)
+
+    def texts(win_name, rival_name, rival_corr):
+        d = _selected(win_name, -13.9)
+        win = d.rounds_[0][0]
+        win.delta_bic = -282.5
+        rival = CandidateResult(rival_name, -223.3, 15.0, {}, {}, {}, [], [], True, "", 0.0,
+                                delta_bic_corrected=rival_corr)
+        d.rounds_ = [[win, rival]]
+        d._added = {win_name: win}
+        return [t for t in effect_cautions(d, m, _exp(), SETUP) if "was preferred to" in t]
+
+    (one,) = texts("motor_coulomb_friction", "second_motor", -15.6)
+    assert one.startswith("motor_coulomb_friction was preferred to second_motor by BIC (dBIC -282.5 against "
+                          "-223.3), but with the noise's correlation modelled the two differ by only -1.7")
+    assert "second_motor in its place did not fit better by every test" in one
+    assert texts("motor_coulomb_friction", "second_motor", 16.1) == []
+    (pair,) = texts("motor_coulomb_friction", "torque_friction_law+second_motor", -15.6)
+    assert "in its place" not in pair and "either may be the cause" in pair
+
+
 def test_rival_caution_of_a_pair_is_given_once():
     # truth: constructed round of pairs.  The winning pair added two effects; a rival pair within the threshold
     # differs in one effect -> one caution (not one per added effect); a rival made of selected effects only is

@@ -151,8 +151,9 @@ def drift_texts(d, params) -> list[str]:
 
 
 def rival_texts(d, r) -> list[str]:
-    """A caution when another candidate of the round whose winner was ``r`` was supported too and its dBIC
-    lies within the BIC threshold of the winner's: the record then hardly tells the two apart (a constant
+    """A caution when another candidate of the round whose winner was ``r`` was supported too and its dBIC,
+    plain or whitened (:attr:`CandidateResult.delta_bic_corrected`), lies within the BIC threshold of the
+    winner's (the rivals of the swap check, ``Diagnosis._swap``): the record then hardly tells the two apart (a constant
     motor friction and a drag at nearly constant speed differ only during the ramp).  A rival whose
     effects were all selected (in a later round) is none.  The winner has the lowest dBIC of the round's
     supported candidates (``diagnose._rank``), so a rival's gap is negative only where the swap check put
@@ -176,11 +177,21 @@ def rival_texts(d, r) -> list[str]:
         if c is r or not c.supported or set(c.effect.split("+")) <= kept:
             continue
         gap = c.delta_bic - r.delta_bic
+        wgap = c.delta_bic_corrected - r.delta_bic_corrected
         if 0.0 <= gap < d.min_delta_bic:
             out.append(f"{r.effect} was preferred to {c.effect} by a BIC difference of only {gap:.1f} (dBIC "
                        f"{r.delta_bic:+.1f} against {c.delta_bic:+.1f}; the threshold is {d.min_delta_bic:g}):"
                        f" on this record the two change the current alike, and either may be the cause. A record "
                        f"where they act differently (another ramp rate or set speed) decides.")
+        elif gap >= 0.0 and math.isfinite(wgap) and wgap < d.min_delta_bic:
+            swapped = "+" not in r.effect and "+" not in c.effect  # the swap check tried it in r's place
+            out.append(f"{r.effect} was preferred to {c.effect} by BIC (dBIC {r.delta_bic:+.1f} against "
+                       f"{c.delta_bic:+.1f}), but with the noise's correlation modelled the two differ by only "
+                       f"{wgap:+.1f} (whitened dBIC {r.delta_bic_corrected:+.1f} against "
+                       f"{c.delta_bic_corrected:+.1f}; the threshold is {d.min_delta_bic:g})"
+                       + (f", and {c.effect} in its place did not fit better by every test" if swapped else "")
+                       + ": on this record the two change the current alike, and either may be the cause. A record "
+                       "where they act differently (another ramp rate or set speed) decides.")
     return out
 
 
