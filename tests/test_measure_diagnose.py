@@ -735,8 +735,9 @@ def test_caution_when_a_rival_explains_the_record_about_as_well():
 def test_caution_when_a_rival_is_as_good_once_the_noise_correlation_is_modelled():
     # truth: constructed rounds (the numbers of an independent plant's record with a second motor of 4 kg m^2,
     # where a motor Coulomb friction won: dBIC -282.5 against -223.3, whitened -13.9 against -15.6).  The plain
-    # gap (59) is beyond the threshold, the whitened one (-1.7) within it -> one caution saying both; a rival
-    # whitened 30 worse -> none; a pair's rival is not said to have been tried in the swap check
+    # gap (59) is beyond the threshold, the whitened one (-1.7) within it -> one caution saying both, and that
+    # the swap check refitted the rival in the winner's place; a rival whitened 30 worse -> none; a rival the
+    # swap check did not refit (a pair) is not said to have been tried
     from kilnctl.measure.diagnose import CandidateResult
 
     m, _ = make_record((), seed=0, t_end=4.0)
@@ -749,6 +750,7 @@ def test_caution_when_a_rival_is_as_good_once_the_noise_correlation_is_modelled(
                                 delta_bic_corrected=rival_corr)
         d.rounds_ = [[win, rival]]
         d._added = {win_name: win}
+        d.swap_tried_ = {("motor_coulomb_friction", "second_motor")}  # the pair refitted in the swap check
         return [t for t in effect_cautions(d, m, _exp(), SETUP) if "was preferred to" in t]
 
     (one,) = texts("motor_coulomb_friction", "second_motor", -15.6)

@@ -437,7 +437,8 @@ class Starts:
 
     def choose(self, u0s, costs, decades=None) -> list:
         """The scaled points the local fits start from (``u0s[0]`` is the given one); ``decades`` (from
-        :meth:`decades`): one more from the best point of each decade no chosen point lies in."""
+        :meth:`decades`): beyond ``n_local``, one more from the best point of each decade no chosen point lies
+        in that lies apart from those chosen (``separation``)."""
         if len(u0s) <= 1:
             return list(u0s)
         order = np.argsort(costs, kind="stable")
@@ -457,8 +458,8 @@ class Starts:
             for i in order:
                 if decades[i] is None or decades[i] in covered:
                     continue
-                if any(np.max(np.abs(u0s[i] - u0s[j]), initial=0.0) <= 1e-12 for j in given + chosen):
-                    continue
+                if any(np.max(np.abs(u0s[i] - u0s[j])) <= self.separation for j in given + chosen):
+                    continue  # next to a chosen point (across a decade's edge): the decade's next best
                 covered.add(decades[i])
                 chosen.append(int(i))
         return [u0s[i] for i in given + chosen]

@@ -153,11 +153,13 @@ def drift_texts(d, params) -> list[str]:
 def rival_texts(d, r) -> list[str]:
     """A caution when another candidate of the round whose winner was ``r`` was supported too and its dBIC,
     plain or whitened (:attr:`CandidateResult.delta_bic_corrected`), lies within the BIC threshold of the
-    winner's (the rivals of the swap check, ``Diagnosis._swap``): the record then hardly tells the two apart (a constant
-    motor friction and a drag at nearly constant speed differ only during the ramp).  A rival whose
-    effects were all selected (in a later round) is none.  The winner has the lowest dBIC of the round's
-    supported candidates (``diagnose._rank``), so a rival's gap is negative only where the swap check put
-    ``r`` in the place of the round's winner; that story is told with the removed effects, not here.
+    winner's (the rivals of the swap check, ``Diagnosis._swap``; the text says when that check refitted the
+    rival in the winner's place and it did not fit better by every test): the record then hardly tells the two
+    apart (a constant motor friction and a drag at nearly constant speed differ only during the ramp).  A
+    rival whose effects were all selected (in a later round) is none.  The winner has the lowest dBIC of the round's
+    supported candidates (``diagnose._rank``), so a rival's gap is negative only for an effect the swap check
+    put in the place of the round's winner (that story is told with the removed effects); such rivals, with a
+    lower dBIC than ``r``, get no caution here.
 
     Parameters
     ----------
@@ -184,7 +186,7 @@ def rival_texts(d, r) -> list[str]:
                        f" on this record the two change the current alike, and either may be the cause. A record "
                        f"where they act differently (another ramp rate or set speed) decides.")
         elif gap >= 0.0 and math.isfinite(wgap) and wgap < d.min_delta_bic:
-            swapped = "+" not in r.effect and "+" not in c.effect  # the swap check tried it in r's place
+            swapped = (r.effect, c.effect) in (getattr(d, "swap_tried_", None) or set())
             out.append(f"{r.effect} was preferred to {c.effect} by BIC (dBIC {r.delta_bic:+.1f} against "
                        f"{c.delta_bic:+.1f}), but with the noise's correlation modelled the two differ by only "
                        f"{wgap:+.1f} (whitened dBIC {r.delta_bic_corrected:+.1f} against "

@@ -22,7 +22,12 @@ The procedure (``docs/tutorial_diagnose.md``):
    part (the tests: :func:`~kilnctl.measure.evidence.judge`);
 5. add the supported candidate with the lowest BIC, and repeat (greedy) until
    no candidate is supported;
-6. refit the final structure on the whole record, and describe what is left
+6. check the selection: remove an effect that no longer earns its place once
+   later ones are in (backward check), and put in a rival that its round's
+   winner beat by less than the BIC threshold when the model with it fits
+   better by every test (swap check);
+7. refit the final structure on the whole record, drop an effect that no
+   longer matters at the final values (final check), and describe what is left
    of the residual (dominant frequency, correlation with the kiln angle,
    speed, acceleration, current) when it still has structure.
 """
@@ -143,7 +148,8 @@ class Diagnosis:
     ranking_ : list of CandidateResult
         The first round: every candidate against the calibrated base.
     selected_ : list of str
-        Effects added, in order.
+        Effects selected, in the order added (an effect of the swap check in the place of the one it
+        replaced).
     final_ : dict
         Fit % per channel of the final model on the whole record.
     final_calibration_ : Calibration
@@ -404,7 +410,7 @@ class Diagnosis:
                 pool.shutdown(wait=True, cancel_futures=True)
 
     def _search(self, m, params, exp, base, scales, train, test, current, pool, say, wall0):
-        """Greedy rounds of candidates, then the final refit (see :meth:`fit`)."""
+        """Greedy rounds of candidates, the backward and swap checks, then the final refit (see :meth:`fit`)."""
         selected: list[str] = []
         rounds = []
         first_current = dict(current.values_)
@@ -472,7 +478,8 @@ class Diagnosis:
         selected, current, self.removed_ = self._backward(m, params, selected, current, fitted, scales, train, test,
                                                           exp, pool, say)
         selected, current, swapped, self.swaps_ = self._swap(m, params, selected, current, added, rounds, scales,
-                                                             train, test, exp, pool, say)
+                                                             train, test, exp, pool, say,
+                                                             {r.effect for r in self.removed_})
         self.removed_ = list(self.removed_) + swapped
         # final model on the whole record: the selected structure refitted from several starts; with nothing
         # selected the base, unless the search re-anchored the base structure in a better valley (then that
@@ -483,6 +490,7 @@ class Diagnosis:
             final = base
         self.final_search_ = _search_summary(final)
         selected, final, dropped = self._final_check(m, params, selected, final, scales, train, test, exp, say)
+        self.swaps_ = {k: v for k, v in self.swaps_.items() if k in selected}
         self.removed_ = list(self.removed_) + dropped
         self.final_search_["then_removed"] = [r.effect for r in dropped]
         self.base_calibration_ = base
@@ -615,7 +623,7 @@ class Diagnosis:
             selected, current = list(rest), cal
         return selected, current, removed
 
-    def _swap(self, m, params, selected, current, added, rounds, scales, train, test, exp, pool, say):
+    def _swap(self, m, params, selected, current, added, rounds, scales, train, test, exp, pool, say, removed=()):
         """Each selected effect against the rivals it narrowly beat in its round (swaps of stepwise selection).
 
         The greedy rounds add the candidate of lowest dBIC; a rival supported in the same round within the
@@ -627,7 +635,8 @@ class Diagnosis:
         fit.  So for each selected effect (not a pair) the structure with each such rival in its place is
         refitted on the fitting part (one local fit, from the current values and the rival's latest ones),
         and it replaces the current model when it is better by every test: plain BIC, whitened BIC and the
-        held-out fit.
+        held-out fit.  Effects the backward check removed are no rivals.  Each pair (winner, rival) whose
+        refit ran is kept in ``swap_tried_`` (the rival caution says so).
 
         Returns
         -------
@@ -635,7 +644,9 @@ class Diagnosis:
             The selection, its calibration, a result for each effect replaced (the dBICs of keeping it, its
             reason naming the replacement) and {effect swapped in: effect it replaced}.
         """
+        dropped = set(removed)
         removed, swaps = [], {}
+        self.swap_tried_ = set()
         latest = {}  # effect -> its latest fitted values in any round
         for rnd in rounds:
             for c in rnd:
@@ -643,11 +654,11 @@ class Diagnosis:
                     latest[c.effect] = dict(c.calibration.values_)
         for e in list(selected):
             won = added.get(e)
-            if won is None or "+" in won.effect or e not in selected:
+            if won is None or "+" in won.effect:
                 continue
             rnd = next((rd for rd in rounds if any(c is won for c in rd)), [])
             rivals = [c for c in rnd if c is not won and c.supported and "+" not in c.effect
-                      and c.effect not in selected and c.calibration is not None
+                      and c.effect not in selected and c.effect not in dropped and c.calibration is not None
                       and (c.delta_bic - won.delta_bic < self.min_delta_bic
                            or c.delta_bic_corrected - won.delta_bic_corrected < self.min_delta_bic)]
             if not rivals:
@@ -658,13 +669,17 @@ class Diagnosis:
                 struct = tuple(c.effect if x == e else x for x in selected)
                 names = self._free_names(params, struct)
                 init = {k: v for k, v in current.values_.items() if k in names}
-                own = [{k: v for k, v in vals.items() if k in names and k not in init}
-                       for vals in (latest[c.effect], c.calibration.values_)]
-                args.append((m, params, struct, scales, train, dict(init, **own[0]), own[1:], exp, ff))
+                # the rival's own values (its latest fit, then its fit in the round): its effect's parameters
+                # completing the current model's, and each whole as a further start
+                own = [{k: v for k, v in vals.items() if k in names} for vals in (latest[c.effect],
+                                                                                   c.calibration.values_)]
+                first = dict(init, **{k: v for k, v in own[0].items() if k not in init})
+                args.append((m, params, struct, scales, train, first, own, exp, ff))
             best = None
             for c, a, cal in zip(rivals, args, self._run_calibrations(args, pool)):
                 if cal is None:
                     continue
+                self.swap_tried_.add((e, c.effect))
                 res = self._evidence(m, c.effect, cal, current, scales, train, test, exp, 0.0)
                 better = res.delta_bic < 0 and res.delta_bic_corrected < 0 and res.holdout_gain >= 0
                 say(f"  swap check: {c.effect} in place of {e}: dBIC {res.delta_bic:+.1f} (whitened "
@@ -676,6 +691,7 @@ class Diagnosis:
                 continue
             c, res, cal, struct = best
             kept = self._evidence(m, e, current, cal, scales, train, test, exp, 0.0)
+            kept.supported = False
             kept.reason = (f"replaced by {c.effect} in the swap check: {e} had won its round by a margin within "
                            f"the BIC threshold, and with {c.effect} in its place the model fits better by every "
                            f"test (dBIC {res.delta_bic:+.1f}, whitened {res.delta_bic_corrected:+.1f}, held-out "
@@ -1160,9 +1176,10 @@ class Diagnosis:
             candidate: ``effect``, ``delta_bic``, ``fit_percent``,
             ``parameters`` with standard errors, ``on_bound`` ...),
             ``rounds`` (every round), ``selected``, ``final`` (fit % per
-            channel), ``final_parameters``, ``unexplained`` (residual
-            signature or null), ``residual_signature``, ``experiment``,
-            ``settings``.
+            channel), ``final_parameters``, ``removed`` (effects added, then
+            removed, each with why), ``swaps`` ({effect the swap check put in:
+            the one it replaced}), ``unexplained`` (residual signature or
+            null), ``residual_signature``, ``experiment``, ``settings``.
         """
         self._check_fitted()
         return _report.diagnosis_dict(self)

@@ -552,6 +552,7 @@ def diagnosis_dict(d) -> dict:
         "rounds": [[candidate_dict(d, i, r) for r in rnd] for i, rnd in enumerate(d.rounds_)],
         "selected": list(d.selected_),
         "removed": [_result_dict(r, "removed", r.reason) for r in getattr(d, "removed_", None) or []],
+        "swaps": dict(getattr(d, "swaps_", None) or {}),
         "final": {k: json_number(v) for k, v in d.final_.items()},
         "final_parameters": _params_dict(fc),
         "final_search": dict(getattr(d, "final_search_", {})),
