@@ -16,6 +16,10 @@ as the shipped example), written in the CSV format ``kilnctl`` reads:
     drive train with stiffness-proportional damping, backlash as a dead zone
     in that link, drag on motor shaft and kiln, an eccentric mass), alone and
     together with the torque law; a few % nuisance on m_v, mu_c, mu_s, J_v.
+    Also (``mag:``, ``pair:``, ``triple:`` names, seed 1 only) one effect at
+    magnitudes beyond those recipes (a second rotor of 4 and of 120 kg m^2, a
+    drive train 35x softer and 3x stiffer than Table 1's ...) and two or three
+    effects together under the paper's friction law.
 ``effect_free``
     Either plant with no effect (nuisance and noise only).
 ``outside``
@@ -143,6 +147,31 @@ _FOREIGN = {
                         "stick-slip with a strong viscous drag"),
     "torque_law+second_motor": ({"friction_law": "torque", "J_m2": (15.0, 40.0)}, "stick-slip with a second motor"),
 }
+#: the independent plant at magnitudes beyond the foreign recipes' and with two or three effects under the paper's
+#: friction law (one record each, seed 1; 2026-11-26): name -> (plant settings, note)
+_FOREIGN_MORE = {
+    "mag:second_motor_4": ({"J_m2": 4.0}, "second rotor of 4 kg m^2 (a fifth of the first)"),
+    "mag:second_motor_120": ({"J_m2": 120.0}, "second rotor of 120 kg m^2"),
+    "mag:compliance_soft": ({"k_tw": 2e7, "beta_tw": 0.02}, "drive train 35x softer than Table 1's (mode near 0.3 Hz)"),
+    "mag:compliance_stiff": ({"k_tw": 2e9, "beta_tw": 0.005}, "drive train 3x stiffer than Table 1's"),
+    "mag:backlash_small": ({"delta_x": 0.002}, "backlash of 2 mm"),
+    "mag:backlash_large": ({"delta_x": 0.04}, "backlash of 40 mm"),
+    "mag:sensor_lag_12ms": ({"tau_sensor": 0.012}, "12 ms speed-sensor lag"),
+    "mag:sensor_lag_1ms": ({"tau_sensor": 0.001}, "1 ms speed-sensor lag (below the noise)"),
+    "mag:unbalance_small": ({"T_ecc": 4e4, "phi_ecc": 1.0}, "kiln unbalance of 4e4 N m"),
+    "mag:unbalance_large": ({"T_ecc": 1e6, "phi_ecc": 4.0}, "kiln unbalance of 1e6 N m"),
+    "mag:drag_small": ({"B_kiln": 4e5, "B_motor": 0.5}, "weak viscous drag"),
+    "mag:drag_large": ({"B_kiln": 2e7, "B_motor": 5.0}, "strong viscous drag"),
+    "pair:second_motor+drag": ({"J_m2": 25.0, "B_kiln": 3e6, "B_motor": 2.0}, "second motor and drag"),
+    "pair:unbalance+sensor_lag": ({"T_ecc": 2e5, "phi_ecc": 2.5, "tau_sensor": 0.005}, "unbalance and sensor lag"),
+    "pair:compliance+unbalance": ({"k_tw": 1e8, "beta_tw": 0.02, "T_ecc": 2e5, "phi_ecc": 5.0},
+                                  "soft drive train and unbalance"),
+    "pair:second_motor+sensor_lag": ({"J_m2": 25.0, "tau_sensor": 0.004}, "second motor and sensor lag"),
+    "pair:drag+unbalance": ({"B_kiln": 3e6, "B_motor": 2.0, "T_ecc": 2.5e5, "phi_ecc": 0.5},
+                            "drag and an unbalance whose torque is nearly constant over the record"),
+    "triple:second_motor+drag+unbalance": ({"J_m2": 30.0, "B_kiln": 3e6, "B_motor": 2.0, "T_ecc": 2.5e5,
+                                            "phi_ecc": 3.0}, "second motor, drag and unbalance"),
+}
 #: the catalogue effects each plant setting stands for
 _EXPECTS = {"J_m2": "second_motor", "I_max_frac": "current_limit", "k_tw": "drivetrain_compliance",
             "delta_x": "backlash", "friction_law": "torque_friction_law", "tau_sensor": "speed_sensor_lag",
@@ -158,6 +187,8 @@ def _all_records() -> list[RecordSpec]:
     recs += _out_of_range()
     recs += [RecordSpec(f"plant:{k}/s{s}", "foreign", "plant", s, plant=dict(v[0]), note=v[1])
              for k, v in _FOREIGN.items() for s in (1, 2)]
+    recs += [RecordSpec(f"{k}/s1", "foreign", "plant", 1, plant=dict(v[0]), note=v[1])
+             for k, v in _FOREIGN_MORE.items()]
     recs += [RecordSpec(f"free:kilnctl/s{s}", "effect_free", "kilnctl", s, note="kilnctl generator, no effect")
              for s in (1, 2)]
     recs += [RecordSpec(f"free:plant/s{s}", "effect_free", "plant", s, note="effect plant, no effect")

@@ -208,3 +208,20 @@ def test_an_effect_the_backward_check_removed_is_reported_with_why_everywhere():
     assert "<h3>Round 2: against base + drivetrain_compliance</h3>" in page
     tail = page[page.index("Effects added, then removed"):]
     assert "<td>+3.0</td><td>+2.0</td>" in tail and "removed: removed in the backward check" in tail
+
+
+def test_headline_with_nothing_selected_gives_the_final_fit():
+    # truth: hand-built diagnoses.  Red team 4 (an ovality load, nothing selected): the base structure refitted
+    # where the search found it a better optimum fitted 81.5 %, and the headline said the first calibration's
+    # 58.4 %.  The final fit is the model's; the first calibration's is said only when it differs.
+    def diag(c0, c1):
+        return SimpleNamespace(selected_=[], baseline_={"current_A": c0}, final_={"current_A": c1},
+                               ranking_=[None] * 8, unexplained_=None)
+
+    plain = report.diagnosis_plain_headline(diag(58.4, 81.5))
+    assert "fits the current to 81.5 % (its first calibration stopped at 58.4 %" in plain
+    assert "58.4 %" not in report.diagnosis_plain_headline(diag(81.5, 81.5))
+    short = report.diagnosis_headline(diag(58.4, 81.5))
+    assert short.startswith("no catalogued effect is supported by the data; current fit 81.5 % with the calibrated "
+                            "base model (its first calibration stopped at 58.4 %)")
+    assert "first calibration" not in report.diagnosis_headline(diag(97.0, 97.02))

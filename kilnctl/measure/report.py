@@ -584,7 +584,9 @@ def diagnosis_headline(d) -> str:
     """
     c0, c1 = d.baseline_["current_A"], d.final_["current_A"]
     if not d.selected_:
-        s = f"no catalogued effect is supported by the data; current fit {c0:.1f} % with the calibrated base model"
+        s = f"no catalogued effect is supported by the data; current fit {c1:.1f} % with the calibrated base model"
+        if abs(c1 - c0) >= 0.05:
+            s += f" (its first calibration stopped at {c0:.1f} %)"
         if d.unexplained_:
             s += f"; the residual still has structure ({d.unexplained_['hint']})"
         return s
@@ -767,8 +769,12 @@ def diagnosis_plain_headline(d) -> str:
     """
     c0, c1 = d.baseline_["current_A"], d.final_["current_A"]
     if not d.selected_:
+        # the final model is the base structure, refitted where the search found it a better optimum
+        again = (f" (its first calibration stopped at {c0:.1f} %; the search found the same model a better "
+                 f"optimum)") if abs(c1 - c0) >= 0.05 else ""
         s = (f"The model needs no catalogued effect to explain this record: none of the "
-             f"{len(d.ranking_)} candidates passed both tests; the calibrated model fits the current to {c0:.1f} %.")
+             f"{len(d.ranking_)} candidates passed both tests; the calibrated model fits the current to "
+             f"{c1:.1f} %{again}.")
         if d.unexplained_:
             s += f" The residual still has structure the catalogue does not explain: {d.unexplained_['hint']}."
         return s
