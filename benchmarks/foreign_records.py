@@ -582,6 +582,13 @@ RECORDS = [
               effects={"quad_drag": {"c_q": 3.1e8}}, expected=("viscous_drag",), layout="kiln",
               note="f23's quadratic drag three times larger: 7.3e5 N m at the set speed (as B_o = 1.5e7, about "
                    "150 A); only the kiln speed logged"),
+    PlantSpec("f24b_unbalance_only", 90.0, 20.0, base=_NUIS, setup_kiln=dict(friction_law="torque"),
+              effects={"ovality": {"T1": 2.0e5, "phi1": 0.6}}, expected=("kiln_unbalance",), layout="iso",
+              note="f24's control: its first harmonic alone (2e5 sin(th_k + 0.6) N m, kilnctl's own form), the same "
+                   "logger"),
+    PlantSpec("f25b_j2_rigid", 30.0, 200.0, base=_NUIS, setup_kiln=dict(friction_law="torque"),
+              effects={"J2": {"J": 25.0}}, expected=("second_motor",), layout="iso_uneven",
+              note="f25's control: its 25 kg m^2 second motor rigidly on the shaft (the J2 form), the same logger"),
 ]
 
 
