@@ -39,6 +39,22 @@ kilnctl's model nor ``benchmarks/baselines.py``.  Its own formulation:
   logged signals only, ``idrift`` (a current-sensor offset drifting linearly at
   ``rate`` A/s), ``dropout`` (the logger repeating its last sample of both
   channels from ``t`` for ``dur`` s) and ``adc`` (current quantised to ``q`` A).
+* Effect forms added by the fourth red team (each neutral when absent):
+  ``delay`` (a pure transport delay ``T_d`` [s] of the speed sensor: the controller
+  and the logger see w_m(t - T_d), read from a ring buffer of the motor speed at the
+  RK4 steps, linear between them for the substeps: the catalogue's
+  speed_sensor_lag in another form), ``filter2`` (a second-order low-pass speed
+  filter, natural frequency ``w_n`` [rad/s], damping ``zeta``, fed back and logged;
+  two states: speed_sensor_lag in another form), ``quad_drag`` (a drag on the
+  kiln shell growing with the square of its speed, ``c_q w_k |w_k|`` [N m],
+  w_k in rad/s: the catalogue's viscous_drag in another form, told apart from
+  friction on the ramp), ``ovality`` (a kiln-angle-periodic load of two harmonics,
+  ``T1 sin(th_k + phi1) + T2 sin(2 th_k + phi2)`` [N m] against the drive:
+  kiln_unbalance in another form when T1 dominates) and ``coupling_j2`` (a second
+  motor of inertia ``J`` [kg m^2] on the motor shaft through a soft coupling of
+  stiffness ``k`` [N m/rad] and damping ``c`` [N m s/rad]; two states: its speed
+  and angle, and it carries no torque of its own: second_motor in another form
+  when the coupling is stiff enough that the rotor follows).
 
 Records are written in layouts kilnctl has not seen (column names, units,
 rates, ISO timestamps, missing samples, uneven time base), each with the
@@ -115,12 +131,33 @@ def _reference(t, c):
     return W - 0.5 * r * u * u / Tj
 
 
+def _delayed(c, t):
+    """delay: the motor speed at t - T_d [rad/s] from the ring buffer ``c["buf"]`` (slot k % size holds the speed at
+    step k of ``c["h"]``), linear between the stored steps; at rest (0) before the trigger."""
+    s = (t - c["T_d"]) / c["h"]
+    if s <= 0:
+        return 0.0
+    k0 = int(math.floor(s))
+    f = s - k0
+    buf = c["buf"]
+    return (1.0 - f) * buf[k0 % buf.size] + f * buf[(k0 + 1) % buf.size]
+
+
 def _rhs(x, t, c, mode):
-    """Right-hand side of the plant. State x = [x_a, z, w_m, th_m, w_k, th_k, psi, w_b, w_s, z_l]."""
-    x_a, z, w_m, th_m, w_k, th_k, psi, w_b, w_s, z_l = x
+    """Right-hand side of the plant.
+
+    State x = [x_a, z, w_m, th_m, w_k, th_k, psi, w_b, w_s, z_l, y_f, v_f, w_2, th_2]: the last four (``filter2``'s
+    output and its rate, ``coupling_j2``'s rotor speed and angle) may be left off when those forms are absent.
+    """
+    x_a, z, w_m, th_m, w_k, th_k, psi, w_b, w_s, z_l = x[:10]
+    y_f, v_f, w_2, th_2 = x[10:14] if x.size > 10 else (0.0, 0.0, 0.0, 0.0)
     e_v = _reference(t, c)
     if c["T_w"] > 0:
         w_fb = c["w_enc"]           # encoder speed, updated by simulate_plant every T_w
+    elif c["T_d"] > 0:
+        w_fb = _delayed(c, t)       # delay: transport delay of the speed sensor
+    elif c["w_n"] > 0:
+        w_fb = y_f                  # filter2: second-order low-pass of the speed
     else:
         w_fb = w_s if c["tau_s"] > 0 else w_m
     e_f = e_v - K_FB * w_fb
@@ -145,7 +182,16 @@ def _rhs(x, t, c, mode):
     T_grav = mg * c["L"] * math.sin(psi)
     T_brg = c["T_brg"] * math.tanh(w_k / 1e-3)
     T_load = c["load"] if t >= c["load_t"] else 0.0
+    if c["c_q"] > 0:   # quad_drag: drag on the shell growing with the square of its speed
+        T_load = T_load + c["c_q"] * w_k * abs(w_k)
+    if c["T1_ov"] > 0 or c["T2_ov"] > 0:   # ovality: kiln-angle-periodic load, first and second harmonic
+        T_load = T_load + (c["T1_ov"] * math.sin(th_k + c["phi1_ov"]) + c["T2_ov"] * math.sin(2 * th_k + c["phi2_ov"]))
     T_motor = phi * c["k_i"] * i_a - c["B_m"] * w_m - c["T_cm"] * math.tanh(w_m / 0.05)
+    a_2 = 0.0
+    if c["J_c"] > 0:   # coupling_j2: a second rotor on the motor shaft through a soft coupling
+        T_c = c["k_c"] * (th_m - th_2) + c["c_c"] * (w_m - w_2)
+        T_motor = T_motor - T_c
+        a_2 = T_c / c["J_c"]
     J_mot = c["J_m"] + c["J2"]
     if c["k_s"] > 0:   # compliant shaft on the motor axis between motor and gearbox
         T_sh = c["k_s"] * (th_m - c["n"] * th_k) + c["c_s"] * (w_m - c["n"] * w_k)
@@ -175,8 +221,12 @@ def _rhs(x, t, c, mode):
     # derivative of e_f for x_a: x_a = i_a - (k_D/L_a) e_f, L_a di/dt = e_a + k_D de_f - R i - k_b w
     dx_a = (e_a - c["R_a"] * i_a - phi * c["k_b"] * w_m) / c["L_a"]
     dz = 0.0 if clamped else e_f
-    d = np.array([dx_a, dz, a_m, w_m, a_k, w_k, w_b if mode else w_k, a_b, dw_s, dz_l])
-    return d, i_a, w_fb, e_v
+    d = [dx_a, dz, a_m, w_m, a_k, w_k, w_b if mode else w_k, a_b, dw_s, dz_l]
+    if x.size > 10:
+        # filter2: y'' = w_n^2 (w_m - y) - 2 zeta w_n y'; coupling_j2: the rotor's speed and angle
+        dv_f = c["w_n"] ** 2 * (w_m - y_f) - 2 * c["zeta"] * c["w_n"] * v_f if c["w_n"] > 0 else 0.0
+        d += [v_f, dv_f, a_2, w_2]
+    return np.array(d), i_a, w_fb, e_v
 
 
 def _holding(x, t, c):
@@ -204,7 +254,13 @@ def plant_constants(spec: PlantSpec) -> dict:
              a_rip=eff.get("gear_ripple", {}).get("a", 0.0), Z_rip=eff.get("gear_ripple", {}).get("Z", 180),
              T_w=eff.get("encoder", {}).get("T_w", 0.0), ppr=eff.get("encoder", {}).get("ppr", 1024),
              w_enc=0.0, w_base=eff.get("field_weak", {}).get("w_base", 0.0) / K_FB,
-             T_j=eff.get("scurve", {}).get("T_j", 0.0))
+             T_j=eff.get("scurve", {}).get("T_j", 0.0),
+             T_d=eff.get("delay", {}).get("T_d", 0.0), w_n=eff.get("filter2", {}).get("w_n", 0.0),
+             zeta=eff.get("filter2", {}).get("zeta", 0.5), c_q=eff.get("quad_drag", {}).get("c_q", 0.0),
+             T1_ov=eff.get("ovality", {}).get("T1", 0.0), phi1_ov=eff.get("ovality", {}).get("phi1", 0.0),
+             T2_ov=eff.get("ovality", {}).get("T2", 0.0), phi2_ov=eff.get("ovality", {}).get("phi2", 0.0),
+             J_c=eff.get("coupling_j2", {}).get("J", 0.0), k_c=eff.get("coupling_j2", {}).get("k", 0.0),
+             c_c=eff.get("coupling_j2", {}).get("c", 0.0))
 
 
 def simulate_plant(spec: PlantSpec, h: float = 5e-4):
@@ -221,22 +277,29 @@ def simulate_plant(spec: PlantSpec, h: float = 5e-4):
     -------
     dict
         ``t`` [s] (0 = ramp start), true motor current ``i_a`` [A], motor speed ``w_m`` [rad/s],
-        sensor speed ``w_s`` [rad/s], reference ``e_v`` [rpm], number of mode changes ``events``.
+        sensor speed ``w_s`` [rad/s], reference ``e_v`` [rpm], ``coupling_j2``'s rotor speed ``w_2`` [rad/s]
+        (0 without it), number of mode changes ``events``.
     """
     c = plant_constants(spec)
     n_steps = int(round(spec.t_end / h))
-    x = np.zeros(10)
+    x = np.zeros(14)
+    if c["T_d"] > 0:   # delay: ring buffer of the motor speed at the steps, long enough for t - T_d - h
+        if c["T_d"] < h:
+            raise ValueError(f"delay T_d = {c['T_d']} s is shorter than the step {h} s")
+        c["h"] = h
+        c["buf"] = np.zeros(int(math.ceil(c["T_d"] / h)) + 3)
+    sensed = c["tau_s"] > 0 or c["T_w"] > 0 or c["T_d"] > 0 or c["w_n"] > 0
     enc_every = max(1, int(round(c["T_w"] / h))) if c["T_w"] > 0 else 0
     enc_prev = 0
     mode = 0
     out_t = np.empty(n_steps + 1)
-    out = np.empty((n_steps + 1, 4))
+    out = np.empty((n_steps + 1, 5))
     events = 0
     t = 0.0
     for k in range(n_steps + 1):
         d, i_a, w_fb, e_v = _rhs(x, t, c, mode)
         out_t[k] = t
-        out[k] = (i_a, x[2], w_fb if (c["tau_s"] > 0 or c["T_w"] > 0) else x[2], e_v)
+        out[k] = (i_a, x[2], w_fb if sensed else x[2], e_v, x[12])
         if k == n_steps:
             break
         k1 = d
@@ -261,11 +324,13 @@ def simulate_plant(spec: PlantSpec, h: float = 5e-4):
         if c["I_lim"] > 0:
             x_new[9] = max(0.0, x_new[9])   # the limiter's integrator only takes voltage off
         x = x_new
+        if c["T_d"] > 0:
+            c["buf"][(k + 1) % c["buf"].size] = x[2]
         if enc_every and (k + 1) % enc_every == 0:   # encoder: whole pulses counted over the last window
             cnt = math.floor(x[3] * c["ppr"] / (2 * math.pi))
             c["w_enc"] = (cnt - enc_prev) * 2 * math.pi / c["ppr"] / (enc_every * h)
             enc_prev = cnt
-    return dict(t=out_t, i_a=out[:, 0], w_m=out[:, 1], w_s=out[:, 2], e_v=out[:, 3], events=events)
+    return dict(t=out_t, i_a=out[:, 0], w_m=out[:, 1], w_s=out[:, 2], e_v=out[:, 3], w_2=out[:, 4], events=events)
 
 
 def _noise(rng, n, dt, std, tau):
@@ -482,6 +547,48 @@ RECORDS = [
                    "longer than one kiln revolution (140 s at 10 Hz); not in the catalogue"),
     PlantSpec("f20b_free_long", 140.0, 10.0, base=_NUIS, setup_kiln=dict(friction_law="torque"), layout="plain",
               note="f20's control: the same plant and logger without the drift (no effect)"),
+    # fourth red team: further forms of catalogue effects (see the module's docstring)
+    PlantSpec("f21_delay", 40.0, 50.0, gains=(0.2, 1.5, 0.0), base=_NUIS, setup_kiln=dict(friction_law="torque"),
+              effects={"delay": {"T_d": 0.03}}, expected=("speed_sensor_lag",), layout="uneven",
+              note="speed sensor with a 30 ms transport delay (fed back and logged) on a drive tuned softly for it "
+                   "(k_p 0.2, k_I 1.5, k_D 0: the paper's gains diverge); the loop rings at about 6 Hz after "
+                   "each breakaway; kilnctl's form: tau_s of about 0.03 s"),
+    PlantSpec("f22_filter2", 40.0, 100.0, gains=(0.22, 1.5, 0.0), base=_NUIS, setup_kiln=dict(friction_law="torque"),
+              effects={"filter2": {"w_n": 2 * math.pi * 10.0, "zeta": 0.5}}, expected=("speed_sensor_lag",),
+              layout="ms", note="second-order speed filter, 10 Hz, zeta 0.5 (fed back and logged; its low-frequency "
+                                "lag 2 zeta / w_n = 16 ms), soft gains as f21; kilnctl's form: tau_s of 10-20 ms"),
+    PlantSpec("f23_quad_drag", 60.0, 20.0, base=_NUIS, setup_kiln=dict(friction_law="torque"),
+              effects={"quad_drag": {"c_q": 1.03e8}}, expected=("viscous_drag",), layout="plain",
+              note="drag on the shell c_q w_k |w_k| with c_q = 1.03e8 N m s^2/rad^2: 2.4e5 N m at the set speed "
+                   "(0.0486 rad/s), as a viscous B_o = 5.0e6 there (about 50 A); a quarter of it at half speed"),
+    PlantSpec("f24_ovality", 90.0, 20.0, base=_NUIS, setup_kiln=dict(friction_law="torque"),
+              effects={"ovality": {"T1": 2.0e5, "phi1": 0.6, "T2": 1.0e5, "phi2": 2.0}}, expected=("kiln_unbalance",),
+              layout="iso", note="kiln load 2e5 sin(th_k + 0.6) + 1e5 sin(2 th_k + 2.0) N m (once and twice per "
+                                 "revolution); 90 s is 0.7 of a kiln revolution; kilnctl's form: T_unb = 2e5"),
+    PlantSpec("f25_coupling_j2", 30.0, 200.0, base=_NUIS, setup_kiln=dict(friction_law="torque"),
+              effects={"coupling_j2": {"J": 25.0, "k": 4.0e4, "c": 150.0}}, expected=("second_motor",),
+              layout="iso_uneven", note="second motor of 25 kg m^2 through a coupling of 4e4 N m/rad and 150 N m s/rad "
+                                        "(8.7 Hz against the motor and the held kiln); kilnctl's form: J_m2 = 25"),
+    PlantSpec("f26_delay_j2", 40.0, 50.0, gains=(0.3, 2.0, 0.0), base=_NUIS, setup_kiln=dict(friction_law="torque"),
+              effects={"J2": {"J": 21.5}, "delay": {"T_d": 0.025}}, expected=("second_motor", "speed_sensor_lag"),
+              layout="plain", note="the paper's second motor (21.5 kg m^2, rigid) and a 25 ms speed-sensor delay, soft "
+                                   "gains (k_p 0.3, k_I 2, k_D 0)"),
+    PlantSpec("f27_quad_ovality", 75.0, 25.0, base=_NUIS, setup_kiln=dict(friction_law="torque"),
+              effects={"quad_drag": {"c_q": 1.03e8}, "ovality": {"T1": 2.0e5, "phi1": -1.0, "T2": 1.0e5, "phi2": 0.5}},
+              expected=("viscous_drag", "kiln_unbalance"), layout="uneven",
+              note="f23's quadratic drag (as B_o = 5e6 at the set speed) and an ovality 2e5 sin(th_k - 1.0) + "
+                   "1e5 sin(2 th_k + 0.5) N m"),
+    PlantSpec("f28_quad_drag_large", 45.0, 50.0, base=_NUIS, setup_kiln=dict(friction_law="torque"),
+              effects={"quad_drag": {"c_q": 3.1e8}}, expected=("viscous_drag",), layout="kiln",
+              note="f23's quadratic drag three times larger: 7.3e5 N m at the set speed (as B_o = 1.5e7, about "
+                   "150 A); only the kiln speed logged"),
+    PlantSpec("f24b_unbalance_only", 90.0, 20.0, base=_NUIS, setup_kiln=dict(friction_law="torque"),
+              effects={"ovality": {"T1": 2.0e5, "phi1": 0.6}}, expected=("kiln_unbalance",), layout="iso",
+              note="f24's control: its first harmonic alone (2e5 sin(th_k + 0.6) N m, kilnctl's own form), the same "
+                   "logger"),
+    PlantSpec("f25b_j2_rigid", 30.0, 200.0, base=_NUIS, setup_kiln=dict(friction_law="torque"),
+              effects={"J2": {"J": 25.0}}, expected=("second_motor",), layout="iso_uneven",
+              note="f25's control: its 25 kg m^2 second motor rigidly on the shaft (the J2 form), the same logger"),
 ]
 
 

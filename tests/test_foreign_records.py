@@ -417,3 +417,120 @@ def test_logged_drift_quantisation_and_dropout():
     k0 = np.flatnonzero(held)[0] - 1
     assert np.all(q["n"][held] == plain["n"][k0]) and np.all(q["i"][held] == q["i"][k0])
     assert held.sum() == 25
+
+
+# --- fourth red team: further forms of catalogue effects, each against a truth derived by hand --------------------
+
+_SOFT = (0.2, 1.5, 0.0)  # gains the delayed or filtered sensor's loop is stable with (the paper's diverge)
+
+
+def test_delay_logs_the_motor_speed_shifted_by_the_delay():
+    # truth (hand): the sensor reads w_m(t - T_d): with T_d a whole number of steps the logged speed is the motor
+    # speed T_d / h steps earlier, and zero (at rest) before T_d
+    fr = _plant()
+    spec = fr.PlantSpec("t_d", 5.0, 50.0, gains=_SOFT, base=dict(mu_s=0.4, mu_c=0.4), effects={"delay": {"T_d": 0.03}})
+    sim = fr.simulate_plant(spec, h=1e-3)
+    np.testing.assert_allclose(sim["w_s"][30:], sim["w_m"][:-30], rtol=0, atol=1e-9)
+    assert np.all(sim["w_s"][:30] == 0.0) and sim["w_m"][29] > 0
+    # substeps: linear between the stored steps
+    c = fr.plant_constants(spec)
+    c.update(h=1e-3, buf=np.array([0.0, 0.0, 2.0, 4.0, 0.0]))  # slots 2 and 3 hold the speeds at steps 2 and 3
+    assert fr._delayed(c, 0.0325) == pytest.approx(3.0, rel=1e-9)  # t - T_d = 2.5 steps
+
+
+def test_second_order_filter_step_and_ramp_responses():
+    # truth (hand): y'' = w_n^2 (u - y) - 2 zeta w_n y'. For a step the peak is 1 + exp(-zeta pi / sqrt(1 - zeta^2))
+    # (16.3 % overshoot at zeta 0.5) at t = pi / (w_n sqrt(1 - zeta^2)), the DC gain 1; on a ramp u = a t the output
+    # lags by a 2 zeta / w_n (the u'' term, (4 zeta^2 - 1) / w_n^2, vanishes at zeta 0.5)
+    fr = _plant()
+    w_n, zeta = 2 * math.pi * 10.0, 0.5
+    spec = fr.PlantSpec("t_f", 5.0, 50.0, gains=_SOFT, base=dict(mu_s=0.4, mu_c=0.4),
+                        effects={"filter2": {"w_n": w_n, "zeta": zeta}})
+    c = fr.plant_constants(spec)
+    x = np.zeros(14)
+    x[2] = 50.0  # the motor speed steps to 50 rad/s; only the filter's two states are integrated
+    h, ys = 2e-4, [0.0]
+
+    def f(y):
+        return fr._rhs(np.concatenate([x[:10], y, x[12:]]), 0.0, c, 0)[0][10:12]
+
+    for _ in range(1500):
+        y = x[10:12]
+        k1 = f(y)
+        k2 = f(y + h / 2 * k1)
+        k3 = f(y + h / 2 * k2)
+        k4 = f(y + h * k3)
+        x[10:12] = y + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        ys.append(x[10])
+    ys = np.array(ys)
+    wd = w_n * math.sqrt(1 - zeta ** 2)
+    assert ys.max() == pytest.approx(50.0 * (1 + math.exp(-zeta * math.pi / math.sqrt(1 - zeta ** 2))), rel=1e-5)
+    assert np.argmax(ys) * h == pytest.approx(math.pi / wd, abs=h)
+    assert ys[-1] == pytest.approx(50.0, rel=2e-4)  # 0.3 s = 9.4 time constants 1 / (zeta w_n): exp(-9.4) = 8e-5
+    sim = fr.simulate_plant(spec, h=1e-3)
+    ramp = (sim["t"] > 3.0) & (sim["t"] < 6.0)
+    a = np.gradient(sim["w_m"], sim["t"])
+    assert np.mean(sim["w_m"][ramp] - sim["w_s"][ramp]) == pytest.approx(np.mean(a[ramp]) * 2 * zeta / w_n, rel=0.01)
+
+
+def test_quadratic_drag_torque_in_the_right_hand_side():
+    # truth (hand): burden held, the drag c_q w_k |w_k| opposes the kiln's motion:
+    # (J_o + J_v + J_m n^2) da_k = -c_q w_k |w_k|, for either direction
+    fr = _plant()
+    p = fr.TABLE1
+    c0 = fr.plant_constants(fr.PlantSpec("t_q", 1.0, 50.0))
+    c = fr.plant_constants(fr.PlantSpec("t_q", 1.0, 50.0, effects={"quad_drag": {"c_q": 1.03e8}}))
+    J = p["J_o"] + p["J_v"] + p["J_m"] * p["n"] ** 2
+    for w_k in (0.0486, -0.02):
+        x = np.array([700.0, 0, w_k * p["n"], 0, w_k, 0, 0.3, w_k, 0, 0])
+        da = fr._rhs(x, 1.0, c, 0)[0][4] - fr._rhs(x, 1.0, c0, 0)[0][4]
+        assert da == pytest.approx(-1.03e8 * w_k * abs(w_k) / J, rel=1e-6)
+    assert 1.03e8 * 0.0486 == pytest.approx(5.0e6, rel=0.01)  # as a viscous B_o at the set speed (record f23)
+
+
+def test_ovality_load_has_the_two_harmonics():
+    # truth (hand): the load T1 sin(th + phi1) + T2 sin(2 th + phi2) has sin / cos coefficients T cos(phi) / T sin(phi)
+    # at orders 1 and 2 and nothing at order 3; it is read from the burden-held kiln's acceleration
+    fr = _plant()
+    p = fr.TABLE1
+    ov = {"T1": 2.0e5, "phi1": 0.6, "T2": 1.0e5, "phi2": 2.0}
+    c0 = fr.plant_constants(fr.PlantSpec("t_o", 1.0, 50.0))
+    c = fr.plant_constants(fr.PlantSpec("t_o", 1.0, 50.0, effects={"ovality": ov}))
+    J = p["J_o"] + p["J_v"] + p["J_m"] * p["n"] ** 2
+    th = np.arange(64) * 2 * math.pi / 64
+    load = []
+    for a in th:
+        x = np.array([700.0, 0, 0.02 * p["n"], 0, 0.02, a, 0.3, 0.02, 0, 0])
+        load.append(-(fr._rhs(x, 1.0, c, 0)[0][4] - fr._rhs(x, 1.0, c0, 0)[0][4]) * J)
+    load = np.array(load)
+    for order, T, phi in ((1, 2.0e5, 0.6), (2, 1.0e5, 2.0), (3, 0.0, 0.0)):
+        assert np.mean(load * np.sin(order * th)) * 2 == pytest.approx(T * math.cos(phi), abs=1.0)
+        assert np.mean(load * np.cos(order * th)) * 2 == pytest.approx(T * math.sin(phi), abs=1.0)
+
+
+def test_coupled_second_motor_resonance_and_stiff_limit():
+    # truth (hand): without motor torque (k_i = k_b -> 0), friction and gravity (mu_brg = 0, L = 0) the drive is two
+    # masses, J_eq = J_m + (J_o + J_v) / n^2 (burden held) and the coupled rotor J, on a spring k: one mode at
+    # sqrt(k (1 / J_eq + 1 / J)); and a stiff coupling carries the rotor along: the speeds coincide and the current
+    # is the rigid second motor's (J2 form)
+    fr = _plant()
+    p = fr.TABLE1
+    base = dict(k_i=1e-9, k_b=1e-9, mu_brg=0.0, L=0.0, B_m=0.0)
+    spec = fr.PlantSpec("t_c", 1.0, 50.0, base=base, effects={"coupling_j2": {"J": 25.0, "k": 4.0e4, "c": 0.0}})
+    c = fr.plant_constants(spec)
+    x0, eps = np.zeros(14), 1e-6
+    jac = np.empty((14, 14))
+    for j in range(14):
+        dx = np.zeros(14)
+        dx[j] = eps
+        jac[:, j] = (fr._rhs(x0 + dx, 0.0, c, 0)[0] - fr._rhs(x0 - dx, 0.0, c, 0)[0]) / (2 * eps)
+    w_mode = np.abs(np.linalg.eigvals(jac).imag).max()
+    J_eq = p["J_m"] + (p["J_o"] + p["J_v"]) / p["n"] ** 2
+    assert w_mode == pytest.approx(math.sqrt(4.0e4 * (1 / J_eq + 1 / 25.0)), rel=1e-6)
+    kw = dict(base=dict(mu_s=0.4, mu_c=0.4), pre_s=0.5)
+    stiff_coupling = {"coupling_j2": {"J": 25.0, "k": 5e5, "c": 1500.0}}  # 31 Hz
+    stiff = fr.simulate_plant(fr.PlantSpec("t_c", 6.0, 50.0, effects=stiff_coupling, **kw), h=1e-3)
+    rigid = fr.simulate_plant(fr.PlantSpec("t_c", 6.0, 50.0, effects={"J2": {"J": 25.0}}, **kw), h=1e-3)
+    ramp = (stiff["t"] > 1.0) & (stiff["t"] < 6.0)
+    assert np.abs(stiff["w_2"][ramp] - stiff["w_m"][ramp]).max() < 1e-5 * stiff["w_m"][ramp].max()
+    np.testing.assert_allclose(stiff["i_a"][ramp], rigid["i_a"][ramp], atol=0.1)  # the rotor adds 42 A
