@@ -178,6 +178,8 @@ class Diagnosis:
         (see :meth:`_swap`) or the final check (see :meth:`_final_check`) removed, with why.
     swaps_ : dict
         {effect the swap check put in: the selected effect it replaced}.
+    swap_tried_ : set of tuple
+        The (winner, rival) pairs the swap check refitted with the rival in the winner's place.
     final_search_ : dict
         How the final structure was refitted: ``n_starts`` (starting points
         compared by cost), ``n_local_fits``, their final ``costs`` [-] and
@@ -635,8 +637,8 @@ class Diagnosis:
         fit.  So for each selected effect (not a pair) the structure with each such rival in its place is
         refitted on the fitting part (one local fit, from the current values and the rival's latest ones),
         and it replaces the current model when it is better by every test: plain BIC, whitened BIC and the
-        held-out fit.  Effects the backward check removed are no rivals.  Each pair (winner, rival) whose
-        refit ran is kept in ``swap_tried_`` (the rival caution says so).
+        held-out fit.  Effects the backward check removed, or a swap replaced, are no rivals.  Each pair
+        (winner, rival) whose refit ran is kept in ``swap_tried_`` (the rival caution says so).
 
         Returns
         -------
@@ -698,6 +700,7 @@ class Diagnosis:
                            f"gain {res.holdout_gain:+.1f} %)")
             removed.append(kept)
             swaps[c.effect] = e
+            dropped.add(e)  # no rival of a later effect: it is among the removed
             say(f"swapped: {c.effect} in place of {e}")
             selected, current = list(struct), cal
             added[c.effect] = c
