@@ -755,7 +755,13 @@ def test_caution_when_a_rival_is_as_good_once_the_noise_correlation_is_modelled(
 
     (one,) = texts("motor_coulomb_friction", "second_motor", -15.6)
     assert one.startswith("motor_coulomb_friction was preferred to second_motor by BIC (dBIC -282.5 against "
-                          "-223.3), but with the noise's correlation modelled the two differ by only -1.7")
+                          "-223.3), but with the noise's correlation modelled second_motor is the better by 1.7 "
+                          "(whitened dBIC -13.9 against -15.6")
+    (close,) = texts("motor_coulomb_friction", "second_motor", -8.9)
+    assert "with the noise's correlation modelled the two differ by only 5.0 (whitened" in close
+    # red team 4 (f26): the rival far better once the correlation is modelled is said so, not "differ by only"
+    (far,) = texts("motor_coulomb_friction", "second_motor", -1230.7)
+    assert "second_motor is the better by 1216.8" in far and "differ by only" not in far
     assert "second_motor in its place did not fit better by every test" in one
     assert texts("motor_coulomb_friction", "second_motor", 16.1) == []
     (pair,) = texts("motor_coulomb_friction", "torque_friction_law+second_motor", -15.6)

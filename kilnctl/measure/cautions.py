@@ -187,9 +187,11 @@ def rival_texts(d, r) -> list[str]:
                        f"where they act differently (another ramp rate or set speed) decides.")
         elif gap >= 0.0 and math.isfinite(wgap) and wgap < d.min_delta_bic:
             swapped = (r.effect, c.effect) in (getattr(d, "swap_tried_", None) or set())
+            by = (f"the two differ by only {wgap:.1f}" if wgap >= 0.0 else
+                  f"{c.effect} is the better by {-wgap:.1f}")
             out.append(f"{r.effect} was preferred to {c.effect} by BIC (dBIC {r.delta_bic:+.1f} against "
-                       f"{c.delta_bic:+.1f}), but with the noise's correlation modelled the two differ by only "
-                       f"{wgap:+.1f} (whitened dBIC {r.delta_bic_corrected:+.1f} against "
+                       f"{c.delta_bic:+.1f}), but with the noise's correlation modelled {by} (whitened dBIC "
+                       f"{r.delta_bic_corrected:+.1f} against "
                        f"{c.delta_bic_corrected:+.1f}; the threshold is {d.min_delta_bic:g})"
                        + (f", and {c.effect} in its place did not fit better by every test" if swapped else "")
                        + ": on this record the two change the current alike, and either may be the cause. A record "
