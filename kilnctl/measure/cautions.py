@@ -16,6 +16,7 @@ import math
 from ..errors import KilnctlError
 from .compare import level_caution
 from .effects import CATALOGUE
+from .evidence import close_rival
 from .report import unit_of as _unit
 from .runner import CHANNELS, run_model
 
@@ -180,12 +181,14 @@ def rival_texts(d, r) -> list[str]:
             continue
         gap = c.delta_bic - r.delta_bic
         wgap = c.delta_bic_corrected - r.delta_bic_corrected
-        if 0.0 <= gap < d.min_delta_bic:
+        if gap < 0.0 or not close_rival(r, c, d.min_delta_bic):
+            continue
+        if gap < d.min_delta_bic:
             out.append(f"{r.effect} was preferred to {c.effect} by a BIC difference of only {gap:.1f} (dBIC "
                        f"{r.delta_bic:+.1f} against {c.delta_bic:+.1f}; the threshold is {d.min_delta_bic:g}):"
                        f" on this record the two change the current alike, and either may be the cause. A record "
                        f"where they act differently (another ramp rate or set speed) decides.")
-        elif gap >= 0.0 and math.isfinite(wgap) and wgap < d.min_delta_bic:
+        else:  # within the threshold by the whitened dBIC only
             swapped = (r.effect, c.effect) in (getattr(d, "swap_tried_", None) or set())
             by = (f"the two differ by only {wgap:.1f}" if wgap >= 0.0 else
                   f"{c.effect} is the better by {-wgap:.1f}")

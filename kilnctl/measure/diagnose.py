@@ -50,7 +50,7 @@ from .effects import CATALOGUE, DEFAULT_CALIBRATE, effect_components, grid_start
 from .breakaways import breakaways
 from .cautions import caution_texts, effect_cautions, setup_cautions
 from .io import Measurement
-from .evidence import CandidateResult, judge
+from .evidence import CandidateResult, close_rival, judge
 from .oscillation import dominant_oscillation, matching_value
 from .outside import CurrentDrift, CurrentStep
 from .runner import CHANNELS, run_model
@@ -661,8 +661,7 @@ class Diagnosis:
             rnd = next((rd for rd in rounds if any(c is won for c in rd)), [])
             rivals = [c for c in rnd if c is not won and c.supported and "+" not in c.effect
                       and c.effect not in selected and c.effect not in dropped and c.calibration is not None
-                      and (c.delta_bic - won.delta_bic < self.min_delta_bic
-                           or c.delta_bic_corrected - won.delta_bic_corrected < self.min_delta_bic)]
+                      and close_rival(won, c, self.min_delta_bic)]
             if not rivals:
                 continue
             ff = self._first_failure(m, current, exp)

@@ -27,7 +27,7 @@ if TYPE_CHECKING:
     from .calibrate import Calibration
 
 __all__ = ["variance_inflation", "noise_filter", "whiten", "holdout_z", "whitened_delta_bic", "CandidateResult",
-           "judge"]
+           "close_rival", "judge"]
 
 
 def variance_inflation(e, max_lag: int | None = None) -> float:
@@ -230,6 +230,25 @@ class CandidateResult:
 
 #: current fit [%] from which the current model's residual is taken to be mostly noise (see :func:`judge`)
 NOISE_FIT = 90.0
+
+
+def close_rival(winner, rival, threshold: float) -> bool:
+    """True when ``rival``'s dBIC, plain or whitened, lies less than ``threshold`` above ``winner``'s (or below
+    it): the round hardly told the two apart (the swap check's rivals, and the rival caution's).
+
+    Parameters
+    ----------
+    winner, rival : CandidateResult
+        Two results of one round.
+    threshold : float
+        The BIC threshold (``Diagnosis.min_delta_bic``).
+
+    Returns
+    -------
+    bool
+    """
+    return (rival.delta_bic - winner.delta_bic < threshold
+            or rival.delta_bic_corrected - winner.delta_bic_corrected < threshold)
 
 
 def judge(m, name, cal, current, scales, train, test, exp, wall_s, *, min_delta_bic: float = 10.0,
