@@ -292,7 +292,8 @@ class Diagnosis:
         cost is kept.  The phase-free residual compares the cycles' level and autocovariance, not the ramp
         against them: where the record holds something the base lacks on the ramp (a second rotor on a
         coupling), it preferred a burden inertia 20 times the plant's that stops the cycles, at 3.5 times the
-        plain cost of the fit without it.
+        cost of the plant's own values.  ``local_fits_``, ``n_starts_`` and ``nfev_`` of the kept calibration
+        count both.
         """
         def base_cal():
             return Calibration(params, self.calibrate, model=self.model, t0=self.t0, max_nfev=self.max_nfev)
@@ -306,6 +307,7 @@ class Diagnosis:
         best = min(fits, key=lambda c: c.cost_)
         best.local_fits_ = [f for c in fits for f in c.local_fits_]
         best.n_starts_ = sum(c.n_starts_ for c in fits)
+        best.nfev_ = sum(c.nfev_ for c in fits)
         return best
 
     def _final_fit(self, m, params, selected, current, exp, pool=None, base=None) -> Calibration:
@@ -399,8 +401,6 @@ class Diagnosis:
         exp = measurement.experiment(params, t0=self.t0)
         m = measurement
         # 1. baseline: the base model calibrated on the whole record
-        # (a grid over the friction regimes and several local fits: a base stuck in a poor valley would make
-        # every candidate that escapes it look like evidence)
         base = self._base_fit(m, params, exp)
         say(f"baseline: {_fmt_fit(base.fit_percent_)} ({base.nfev_} runs)")
         self.setup_cautions_ = setup_cautions(m, params, exp, self.model)
