@@ -156,8 +156,9 @@ def rival_texts(d, r) -> list[str]:
     plain or whitened (:attr:`CandidateResult.delta_bic_corrected`), lies within the BIC threshold of the
     winner's (the rivals of the swap check, ``Diagnosis._swap``; the text says when that check refitted the
     rival in the winner's place and it did not fit better by every test): the record then hardly tells the two
-    apart (a constant motor friction and a drag at nearly constant speed differ only during the ramp).  A
-    rival whose effects were all selected (in a later round) is none.  The winner has the lowest dBIC of the round's
+    apart (a constant motor friction and a drag at nearly constant speed differ only during the ramp).  Rivals
+    within the threshold by the whitened dBIC only share one caution when there are several (on red team 4's
+    ovality record three of them: one story, told once).  A rival whose effects were all selected (in a later round) is none.  The winner has the lowest dBIC of the round's
     supported candidates (``diagnose._rank``), so a rival's gap is negative only for an effect the swap check
     put in the place of the round's winner (that story is told with the removed effects); such rivals, with a
     lower dBIC than ``r``, get no caution here.
@@ -175,12 +176,12 @@ def rival_texts(d, r) -> list[str]:
     """
     rnd = next((rd for rd in d.rounds_ if any(c is r for c in rd)), [])
     kept = set(d.selected_) | set(r.effect.split("+"))
-    out = []
+    tried = getattr(d, "swap_tried_", None) or set()
+    out, whitened = [], []
     for c in rnd:
         if c is r or not c.supported or set(c.effect.split("+")) <= kept:
             continue
         gap = c.delta_bic - r.delta_bic
-        wgap = c.delta_bic_corrected - r.delta_bic_corrected
         if gap < 0.0 or not close_rival(r, c, d.min_delta_bic):
             continue
         if gap < d.min_delta_bic:
@@ -189,17 +190,39 @@ def rival_texts(d, r) -> list[str]:
                        f" on this record the two change the current alike, and either may be the cause. A record "
                        f"where they act differently (another ramp rate or set speed) decides.")
         else:  # within the threshold by the whitened dBIC only
-            swapped = (r.effect, c.effect) in (getattr(d, "swap_tried_", None) or set())
-            by = (f"the two differ by only {wgap:.1f}" if wgap >= 0.0 else
-                  f"{c.effect} is the better by {-wgap:.1f}")
-            out.append(f"{r.effect} was preferred to {c.effect} by BIC (dBIC {r.delta_bic:+.1f} against "
-                       f"{c.delta_bic:+.1f}), but with the noise's correlation modelled {by} (whitened dBIC "
-                       f"{r.delta_bic_corrected:+.1f} against "
-                       f"{c.delta_bic_corrected:+.1f}; the threshold is {d.min_delta_bic:g})"
-                       + (f", and {c.effect} in its place did not fit better by every test" if swapped else "")
-                       + ": on this record the two change the current alike, and either may be the cause. A record "
-                       "where they act differently (another ramp rate or set speed) decides.")
+            whitened.append(c)
+    if len(whitened) == 1:
+        c = whitened[0]
+        wgap = c.delta_bic_corrected - r.delta_bic_corrected
+        by = f"the two differ by only {wgap:.1f}" if wgap >= 0.0 else f"{c.effect} is the better by {-wgap:.1f}"
+        out.append(f"{r.effect} was preferred to {c.effect} by BIC (dBIC {r.delta_bic:+.1f} against "
+                   f"{c.delta_bic:+.1f}), but with the noise's correlation modelled {by} (whitened dBIC "
+                   f"{r.delta_bic_corrected:+.1f} against {c.delta_bic_corrected:+.1f}; the threshold is "
+                   f"{d.min_delta_bic:g})"
+                   + (f", and {c.effect} in its place did not fit better by every test"
+                      if (r.effect, c.effect) in tried else "")
+                   + ": on this record the two change the current alike, and either may be the cause. A record "
+                   "where they act differently (another ramp rate or set speed) decides.")
+    elif whitened:  # one caution for all of them: the same story told once
+        names = _listed([c.effect for c in whitened])
+        swapped = [c.effect for c in whitened if (r.effect, c.effect) in tried]
+        out.append(f"{r.effect} was preferred by BIC (dBIC {r.delta_bic:+.1f}) to {names} (dBIC "
+                   f"{_listed([f'{c.delta_bic:+.1f}' for c in whitened])}), but with the noise's correlation "
+                   f"modelled each of them is about as good or better (whitened dBIC {r.delta_bic_corrected:+.1f} "
+                   f"against {_listed([f'{c.delta_bic_corrected:+.1f}' for c in whitened])}; the threshold is "
+                   f"{d.min_delta_bic:g})"
+                   + ((", and each in its place did not fit better by every test" if len(swapped) == len(whitened)
+                       else f", and {_listed(swapped)} in its place did not fit better by every test")
+                      if swapped else "")
+                   + f": on this record they change the current much as {r.effect} does, and any of them may be "
+                   "the cause. A record where they act differently (another ramp rate or set speed) decides.")
     return out
+
+
+def _listed(items) -> str:
+    """``a``, ``a and b``, ``a, b and c``."""
+    items = list(items)
+    return items[0] if len(items) == 1 else f"{', '.join(items[:-1])} and {items[-1]}"
 
 
 def caution_texts(effect: str, span_s: float, period_s: float | None, short_record_note: str,
