@@ -1,5 +1,5 @@
 """Candidates refitted against a stick-slip model (calibrate._Search.fit_all, Calibration.fit's start ranking,
-Diagnosis._refit_from_setup).
+Diagnosis._refit_from_setup), and the base calibrated under a stated torque law (Diagnosis._base_fit).
 
 Truths: records of the independently written plants (benchmarks/foreign_records.py and the benchmark plant
 of benchmarks/diagnose_records.py, each with its own stick-slip state machine) and of kilnctl's generator;
@@ -222,7 +222,6 @@ def test_a_small_held_out_gain_that_the_whitened_bic_contradicts_is_not_evidence
         assert r.delta_bic < -d.min_delta_bic and d.min_holdout_gain < r.holdout_gain < 3 * d.min_holdout_gain
         assert r.delta_bic_corrected > 0 and r.holdout_z < d.holdout_z
         assert not r.supported and "slowly correlated noise" in r.reason
-
 
 
 def test_the_base_under_the_torque_law_fits_about_as_well_as_the_plants_own_values(tmp_path):
