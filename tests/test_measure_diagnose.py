@@ -846,3 +846,41 @@ def test_several_rivals_by_the_whitened_bic_share_one_caution():
                           "-47.1 against -202.4, -124.4 and -282.2; the threshold is 10), and second_motor and "
                           "speed_sensor_lag in its place did not fit better by every test: ")
     assert "any of them may be the cause" in one
+
+
+def test_final_check_removes_a_compliance_whose_final_values_cannot_ring():
+    # truth: the damping ratio worked out by hand, zeta = C_po / (2 sqrt(k_po J)), J the two-mass mode's inertia
+    # at the kiln axis (motor side (J_m + J_m2) n^2 in series with J_kiln + J_v).  Red team 4's second-order
+    # speed filter (f22) ended with a compliance of k_po 9.23e6, C_po 7.86e9 (zeta about 480) that the final fit
+    # reached from other starts; the rounds refuse such a refit (from zeta 0.7 a step overshoots by < 5 %), the
+    # final check now does too, however much it lowers the BIC (dBIC -182 here).  The same compliance at a
+    # ringing stiffness and damping stays.  The calibrations are stand-ins: only the check's logic is tested
+    import math
+
+    from kilnctl.measure.evidence import CandidateResult
+
+    j_motor = (SETUP.J_m + SETUP.J_m2) * SETUP.n ** 2
+    j_kiln = SETUP.J_kiln + SETUP.J_v
+    j_mode = j_motor * j_kiln / (j_motor + j_kiln)
+    zeta = 7.86e9 / (2.0 * math.sqrt(9.23e6 * j_mode))
+    assert zeta > 100
+
+    def check(k_po, C_po):
+        d = Diagnosis(SETUP)
+        base = {"mu_c": 0.39, "mu_s": 0.52, "m_v": 6.0e5, "J_v": 1.6e6}
+        final = SimpleNamespace(values_=dict(base, tau_s=0.0156, k_po=k_po, C_po=C_po), params_=SETUP,
+                                cost_=1.0)
+        d._calibrate = lambda m, params, rest, *a: SimpleNamespace(values_=dict(base, tau_s=0.0156),
+                                                                    params_=SETUP, cost_=1.1)
+        d._evidence = lambda m, e, cal, without, *a: CandidateResult(e, -182.0, 0.0, {}, {}, {}, [], [], True,
+                                                                     "", 0.0, delta_bic_corrected=-418.0)
+        return d._final_check(None, SETUP, ["speed_sensor_lag", "drivetrain_compliance"], final, None, None, None,
+                              None, lambda s: None)
+
+    selected, _, dropped = check(9.23e6, 7.86e9)
+    assert selected == ["speed_sensor_lag"]
+    (r,) = dropped
+    assert r.effect == "drivetrain_compliance" and not r.supported and r.stand_in
+    assert f"damped at {zeta:.2g} of its" in r.reason and "keeping it: dBIC -182.0" in r.reason
+    selected, _, dropped = check(2.0e8, 2.0e6)  # zeta 0.017: a drive train that rings
+    assert selected == ["speed_sensor_lag", "drivetrain_compliance"] and dropped == []
