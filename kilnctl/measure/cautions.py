@@ -151,6 +151,12 @@ def drift_texts(d, params) -> list[str]:
             f"it is not, correct the setup."]
 
 
+#: how every rival caution ends: what would tell the effects apart
+_DECIDES = "A record where they act differently (another ramp rate or set speed) decides."
+#: what the rival caution adds for a rival the swap check refitted in the winner's place
+_NOT_BETTER = "in its place did not fit better by every test"
+
+
 def rival_texts(d, r) -> list[str]:
     """A caution when another candidate of the round whose winner was ``r`` was supported too and its dBIC,
     plain or whitened (:attr:`CandidateResult.delta_bic_corrected`), lies within the BIC threshold of the
@@ -158,10 +164,11 @@ def rival_texts(d, r) -> list[str]:
     rival in the winner's place and it did not fit better by every test): the record then hardly tells the two
     apart (a constant motor friction and a drag at nearly constant speed differ only during the ramp).  Rivals
     within the threshold by the whitened dBIC only share one caution when there are several (on red team 4's
-    ovality record three of them: one story, told once).  A rival whose effects were all selected (in a later round) is none.  The winner has the lowest dBIC of the round's
-    supported candidates (``diagnose._rank``), so a rival's gap is negative only for an effect the swap check
-    put in the place of the round's winner (that story is told with the removed effects); such rivals, with a
-    lower dBIC than ``r``, get no caution here.
+    ovality record three of them: one story, told once).  A rival whose effects were all selected (in a later
+    round) is none.  The winner has the lowest dBIC of the round's supported candidates (``diagnose._rank``),
+    so a rival's gap is negative only for an effect the swap check put in the place of the round's winner
+    (that story is told with the removed effects); such rivals, with a lower dBIC than ``r``, get no caution
+    here.
 
     Parameters
     ----------
@@ -187,8 +194,7 @@ def rival_texts(d, r) -> list[str]:
         if gap < d.min_delta_bic:
             out.append(f"{r.effect} was preferred to {c.effect} by a BIC difference of only {gap:.1f} (dBIC "
                        f"{r.delta_bic:+.1f} against {c.delta_bic:+.1f}; the threshold is {d.min_delta_bic:g}):"
-                       f" on this record the two change the current alike, and either may be the cause. A record "
-                       f"where they act differently (another ramp rate or set speed) decides.")
+                       f" on this record the two change the current alike, and either may be the cause. {_DECIDES}")
         else:  # within the threshold by the whitened dBIC only
             whitened.append(c)
     if len(whitened) == 1:
@@ -199,10 +205,8 @@ def rival_texts(d, r) -> list[str]:
                    f"{c.delta_bic:+.1f}), but with the noise's correlation modelled {by} (whitened dBIC "
                    f"{r.delta_bic_corrected:+.1f} against {c.delta_bic_corrected:+.1f}; the threshold is "
                    f"{d.min_delta_bic:g})"
-                   + (f", and {c.effect} in its place did not fit better by every test"
-                      if (r.effect, c.effect) in tried else "")
-                   + ": on this record the two change the current alike, and either may be the cause. A record "
-                   "where they act differently (another ramp rate or set speed) decides.")
+                   + (f", and {c.effect} {_NOT_BETTER}" if (r.effect, c.effect) in tried else "")
+                   + f": on this record the two change the current alike, and either may be the cause. {_DECIDES}")
     elif whitened:  # one caution for all of them: the same story told once
         names = _listed([c.effect for c in whitened])
         swapped = [c.effect for c in whitened if (r.effect, c.effect) in tried]
@@ -211,11 +215,10 @@ def rival_texts(d, r) -> list[str]:
                    f"modelled each of them is about as good or better (whitened dBIC {r.delta_bic_corrected:+.1f} "
                    f"against {_listed([f'{c.delta_bic_corrected:+.1f}' for c in whitened])}; the threshold is "
                    f"{d.min_delta_bic:g})"
-                   + ((", and each in its place did not fit better by every test" if len(swapped) == len(whitened)
-                       else f", and {_listed(swapped)} in its place did not fit better by every test")
-                      if swapped else "")
+                   + ((f", and each {_NOT_BETTER}" if len(swapped) == len(whitened)
+                       else f", and {_listed(swapped)} {_NOT_BETTER}") if swapped else "")
                    + f": on this record they change the current much as {r.effect} does, and any of them may be "
-                   "the cause. A record where they act differently (another ramp rate or set speed) decides.")
+                   f"the cause. {_DECIDES}")
     return out
 
 
