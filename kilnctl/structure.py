@@ -135,7 +135,8 @@ class Structure:
 
     @classmethod
     def from_diagnosis(cls, source, model: str | None = None) -> "Structure":
-        """Return the structure a diagnosis selected: its model with its selected effects.
+        """Return the structure a diagnosis selected: its model with its selected effects, each in the form it
+        was fitted in (the second-order filter's component for a ``speed_sensor_lag`` kept in that form).
 
         Parameters
         ----------
@@ -156,7 +157,13 @@ class Structure:
             The file is missing, not JSON, or not a diagnosis.
         """
         d = diagnosis_dict(source)
-        return cls(model or d.get("settings", {}).get("model") or "macro", tuple(d["selected"]))
+        forms = d.get("forms") or {}
+        effects = []
+        for e in d["selected"]:
+            form = next((f for f in CATALOGUE[e].forms if f.name == forms[e]), None) \
+                if e in forms and e in CATALOGUE else None
+            effects += list(form.components) if form is not None else [e]
+        return cls(model or d.get("settings", {}).get("model") or "macro", tuple(effects))
 
     def __str__(self) -> str:
         text = " + ".join((self.model,) + self.effects)

@@ -21,7 +21,10 @@ The procedure (``docs/tutorial_diagnose.md``):
    fitted by a kiln unbalance); a spurious effect gains nothing on the held-out
    part (the tests: :func:`~kilnctl.measure.evidence.judge`);
 5. add the supported candidate with the lowest BIC, and repeat (greedy) until
-   no candidate is supported;
+   no candidate is supported; an effect with other forms (a second-order
+   speed filter for the first-order lag) is refitted in each, once it is
+   added, and a form is kept on the evidence of step 4 against the effect's
+   own form;
 6. check the selection: remove an effect that no longer earns its place once
    later ones are in (backward check), and put in a rival that its round's
    winner beat by less than the BIC threshold when the model with it fits
@@ -82,6 +85,8 @@ INERTIA_STEPS, INERTIA_SPAN = 11, 0.1
 SETUP_FAR = 0.1
 #: that search screens this many times as many starting points as it fits (see Calibration.fit, ``screen``)
 SCREEN = 2
+#: a form is refitted from the effect's own fitted parameters times these factors (see Diagnosis._try_forms)
+FORM_FACTORS = (0.8, 1.0, 1.25, 1.6)
 
 
 class Diagnosis:
@@ -178,6 +183,11 @@ class Diagnosis:
         (see :meth:`_swap`) or the final check (see :meth:`_final_check`) removed, with why.
     swaps_ : dict
         {effect the swap check put in: the selected effect it replaced}.
+    forms_ : dict
+        {selected effect: the name of the :class:`~kilnctl.model.catalogue.Form` it is fitted in}, for the
+        effects whose other form the evidence kept (see :meth:`_try_forms`).
+    form_results_ : list of (str, str, CandidateResult)
+        Every form tried: the effect, the form's name, and its evidence against the effect's own form.
     swap_tried_ : set of tuple
         The (winner, rival) pairs the swap check refitted with the rival in the winner's place.
     final_search_ : dict
@@ -227,6 +237,7 @@ class Diagnosis:
         if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
             raise ModelError(f"workers = {workers!r} must be a positive integer (processes refitting candidates)")
         self.workers = workers
+        self._forms: dict = {}  # effect -> the Form it is fitted in (during a fit; the workers' copy has it)
 
     # --- structure of a model: base model + effects ------------------------------------
     def _cyclic(self, effects) -> tuple:
@@ -247,11 +258,14 @@ class Diagnosis:
         for e in effects:
             if CATALOGUE[e].model is not None:
                 model = CATALOGUE[e].model
-        comps, p = effect_components(effects, params, model=model)
+        forms = getattr(self, "_forms", {})
+        names = [c for e in effects for c in (forms[e].components if e in forms else (e,))]
+        comps, p = effect_components(names, params, model=model)
         free = list(self.calibrate)
         for e in effects:
             have = {f if isinstance(f, str) else f.name for f in free}
-            free += [fp for fp in CATALOGUE[e].parameters if fp.name not in have]
+            own = CATALOGUE[e].parameters + (forms[e].parameters if e in forms else ())
+            free += [fp for fp in own if fp.name not in have]
         return model, comps, p, free
 
     def _setup_values(self, params) -> dict:
@@ -397,6 +411,8 @@ class Diagnosis:
         """
         say = progress or (lambda s: None)
         wall0 = time.perf_counter()
+        self._forms = {}
+        self.form_results_ = []
         params = resolve_gains(self.params)
         exp = measurement.experiment(params, t0=self.t0)
         m = measurement
@@ -492,8 +508,10 @@ class Diagnosis:
                 selected.append(e)
                 added[e] = best
             current = best.calibration
-            fitted[tuple(sorted(selected))] = current
             say(f"added {best.effect}")
+            current = self._try_forms(m, params, selected, best.effect.split("+"), current, scales, train, test,
+                                      exp, say)
+            fitted[tuple(sorted(selected))] = current
         selected, current, self.removed_ = self._backward(m, params, selected, current, fitted, scales, train, test,
                                                           exp, pool, say)
         selected, current, swapped, self.swaps_ = self._swap(m, params, selected, current, added, rounds, scales,
@@ -510,6 +528,7 @@ class Diagnosis:
         self.final_search_ = _search_summary(final)
         selected, final, dropped = self._final_check(m, params, selected, final, scales, train, test, exp, say)
         self.swaps_ = {k: v for k, v in self.swaps_.items() if k in selected}
+        self.forms_ = {e: f.name for e, f in self._forms.items() if e in selected}
         self.removed_ = list(self.removed_) + dropped
         self.final_search_["then_removed"] = [r.effect for r in dropped]
         self.base_calibration_ = base
@@ -546,6 +565,47 @@ class Diagnosis:
         say(f"final: {_fmt_fit(self.final_)} with {', '.join(selected) or 'no effect added'} "
             f"({self.wall_s_:.1f} s)")
         return self
+
+    def _try_forms(self, m, params, selected, new, current, scales, train, test, exp, say) -> Calibration:
+        """Refit the model with each other form of the effects just added (``new``); keep a form on the evidence.
+
+        The refit starts where the form behaves as the effect's own (:attr:`Form.near`), so it never ends worse
+        than ``current``, and from the form's starts with the effect's own fitted parameters times
+        :data:`FORM_FACTORS` (a first-order lag fitted to a second-order filter's record ends about 20 % short
+        of the filter's low-frequency delay).  A form is kept when :func:`~kilnctl.measure.evidence.judge`
+        supports it against ``current``, the effect in its own form: the tests every candidate passes, with
+        the form's added parameters counted.  The first form kept ends the effect's search.
+
+        Returns
+        -------
+        Calibration
+            ``current``, or the refit in the kept form.
+        """
+        for name in new:
+            own = [k for fp in CATALOGUE[name].parameters for k in (fp.name, fp.partner) if k]
+            for form in CATALOGUE[name].forms:
+                t_start = time.perf_counter()
+                self._forms[name] = form
+                starts = [dict(g, **{k: f * current.values_[k] for k in own if k in current.values_})
+                          for g in (form.near,) + tuple(form.starts) for f in FORM_FACTORS]
+                try:
+                    cal = self._calibrate(m, params, tuple(selected), scales, train,
+                                          dict(current.values_, **form.near), starts, experiment=exp,
+                                          first_failure=self._first_failure(m, current, exp), new_effect=name)
+                except KilnctlError as exc:
+                    del self._forms[name]
+                    say(f"  {name} as {form.name}: could not be fitted: {exc}")
+                    continue
+                r = self._evidence(m, name, cal, current, scales, train, test, exp, time.perf_counter() - t_start)
+                self.form_results_.append((name, form.name, r))
+                say(f"  {name} as {form.name}: dBIC {r.delta_bic:+10.1f} (whitened {r.delta_bic_corrected:+8.1f})  "
+                    f"held-out gain {r.holdout_gain:+6.1f} % (z {r.holdout_z:+5.1f})  "
+                    f"{'kept' if r.supported else '-'}")
+                if r.supported:
+                    current = cal
+                    break
+                del self._forms[name]
+        return current
 
     def _stick_slip_missing(self, m, current, exp) -> bool:
         """True when the record's current falls sharply again and again after the ramp (stick-slip
@@ -1209,7 +1269,8 @@ class Diagnosis:
             ``rounds`` (every round), ``selected``, ``final`` (fit % per
             channel), ``final_parameters``, ``removed`` (effects added, then
             removed, each with why), ``swaps`` ({effect the swap check put in:
-            the one it replaced}), ``unexplained`` (residual signature or
+            the one it replaced}), ``forms`` ({effect: the other form it is
+            fitted in}), ``forms_tried`` (each form's evidence), ``unexplained`` (residual signature or
             null), ``residual_signature``, ``experiment``, ``settings``.
         """
         self._check_fitted()

@@ -9,6 +9,7 @@ PNG), each file written whole or not at all.
 from __future__ import annotations
 
 import base64
+import dataclasses
 import html
 import io
 import json
@@ -30,7 +31,7 @@ __all__ = ["figure_tag", "table", "page", "write_report_files", "esc", "json_num
            "diagnosis_plain_headline", "uncertainty_words", "how_to_read", "settings_table", "parameter_table",
            "figure_block", "record_name_of", "HOW_TO_READ", "pretty_unit", "value_pair", "png_bytes", "write_page_files",
            "render_pngs", "report_page", "candidate_dict", "candidate_verdict", "greedy_order", "round_model",
-           "SUMMARY_WIDTH"]
+           "form_verdicts", "SUMMARY_WIDTH"]
 
 _CSS = """
 *{box-sizing:border-box}
@@ -361,10 +362,53 @@ def _effect_params(effect) -> tuple[str, ...]:
     return tuple(dict.fromkeys(k for fp in CATALOGUE[effect].parameters for k in (fp.name, fp.partner) if k))
 
 
+def _form_params_of(effect, name) -> tuple[str, ...]:
+    """The parameters the form ``name`` of an effect adds to the effect's own (none for another name)."""
+    form = next((f for f in CATALOGUE[effect].forms if f.name == name), None)
+    return tuple(fp.name for fp in form.parameters) if form is not None else ()
+
+
+def _form_params(d, effect) -> tuple[str, ...]:
+    """The parameters the form a selected effect is fitted in adds to the effect's own (none in its own form)."""
+    return _form_params_of(effect, (getattr(d, "forms_", None) or {}).get(effect))
+
+
+def _as_form(r, effect, form):
+    """A form's evidence under the name ``effect (form form)`` for the summary's and the report's rows."""
+    return dataclasses.replace(r, effect=f"{effect} ({form} form)")
+
+
 def _fitted_effect_params(d):
-    """``(effect, parameter)`` of every selected effect's parameter the final calibration fitted."""
+    """``(effect, parameter)`` of every selected effect's parameter the final calibration fitted (its form's
+    too)."""
     fitted = d.final_calibration_.values_
-    return [(e, k) for e in d.selected_ for k in _effect_params(e) if k in fitted]
+    return [(e, k) for e in d.selected_ for k in _effect_params(e) + _form_params(d, e) if k in fitted]
+
+
+def form_verdicts(d) -> list[tuple]:
+    """Every other form of an added effect the diagnosis tried, with its verdict.
+
+    Parameters
+    ----------
+    d : Diagnosis
+        A fitted diagnosis.
+
+    Returns
+    -------
+    list of (str, str, CandidateResult, str, str)
+        The effect, the form's name, its evidence against the effect in its own form, ``kept`` or ``not
+        kept``, and why (the evidence's own reason).
+    """
+    kept = getattr(d, "forms_", None) or {}
+    return [(e, f, r, "kept" if r.supported and kept.get(e) == f else "not kept", r.reason)
+            for e, f, r in getattr(d, "form_results_", None) or []]
+
+
+def _selected_names(d) -> list[str]:
+    """The selected effects, each fitted in another form named with it (``speed_sensor_lag (second_order
+    form)``)."""
+    forms = getattr(d, "forms_", None) or {}
+    return [f"{e} ({forms[e]} form)" if e in forms else e for e in d.selected_]
 
 
 def _params_dict(cal) -> dict:
@@ -417,6 +461,9 @@ def round_model(d, i: int, base: str = "the base") -> str:
     str
     """
     before = _added_in(d.rounds_[:i])
+    # an effect refitted in another form right after its round: the later rounds ran against that form
+    forms = {e: f for e, f, r in getattr(d, "form_results_", None) or [] if r.supported}
+    before = [f"{e} ({forms[e]} form)" if e in forms else e for e in before]
     return base if not before else "base + " + ", ".join(before)
 
 
@@ -553,6 +600,8 @@ def diagnosis_dict(d) -> dict:
         "selected": list(d.selected_),
         "removed": [_result_dict(r, "removed", r.reason) for r in getattr(d, "removed_", None) or []],
         "swaps": dict(getattr(d, "swaps_", None) or {}),
+        "forms": dict(getattr(d, "forms_", None) or {}),
+        "forms_tried": [dict(_result_dict(r, verdict, why), form=f) for _, f, r, verdict, why in form_verdicts(d)],
         "final": {k: json_number(v) for k, v in d.final_.items()},
         "final_parameters": _params_dict(fc),
         "final_search": dict(getattr(d, "final_search_", {})),
@@ -591,9 +640,9 @@ def diagnosis_headline(d) -> str:
             s += f"; the residual still has structure ({d.unexplained_['hint']})"
         return s
     fc = d.final_calibration_
-    parts = [f"{k} = {_fmt_val(fc.values_[k], fc.stderr_[k])} {unit_of(k)}".rstrip()
+    parts = [f"{k} = {_fmt_val(fc.values_[k], fc.stderr_[k])} {unit_of(k).strip('-')}".rstrip()
              for _, k in _fitted_effect_params(d)]
-    return (f"current fit rose from {c0:.1f} % to {c1:.1f} % after adding {', '.join(d.selected_)}"
+    return (f"current fit rose from {c0:.1f} % to {c1:.1f} % after adding {', '.join(_selected_names(d))}"
             + (f", {', '.join(parts)}" if parts else ""))
 
 
@@ -633,6 +682,12 @@ def diagnosis_summary(d) -> str:
                      + round_model(d, i))
         lines.append(head)
         lines += [x for r in rnd for x in _summary_rows(r, *candidate_verdict(d, i, r))]
+    forms = form_verdicts(d)
+    if forms:
+        lines += _wrap("other forms of an added effect, each against the effect in its own form", "  ")
+        lines.append(head)
+        lines += [x for e, f, r, verdict, why in forms
+                  for x in _summary_rows(_as_form(r, e, f), verdict, why)]
     removed = getattr(d, "removed_", None) or []
     if removed:
         lines += _wrap("effects added, then removed (by the backward or the swap check on the fitting part, or "
@@ -640,7 +695,7 @@ def diagnosis_summary(d) -> str:
                        "with its replacement in its place (the dBICs of keeping it)", "  ")
         lines.append(head)
         lines += [x for r in removed for x in _summary_rows(r, "removed", r.reason)]
-    lines += _wrap(f"selected: {', '.join(d.selected_) or 'nothing'}", "  ")
+    lines += _wrap(f"selected: {', '.join(_selected_names(d)) or 'nothing'}", "  ")
     lines += _wrap(f"final: {format_fit(d.final_)}", "  ")
     fs = getattr(d, "final_search_", None)
     if fs and fs["n_local_fits"]:
@@ -782,7 +837,9 @@ def diagnosis_plain_headline(d) -> str:
     vals: dict = {e: [] for e in d.selected_}
     for e, k in _fitted_effect_params(d):
         vals[e].append(f"{k} = {_value_words(fc.values_[k], fc.stderr_[k], k in fc.not_identifiable_, unit_of(k))}")
-    found = [_effect_words(e) + (f" ({', '.join(v)})" if v else "") for e, v in vals.items()]
+    forms = getattr(d, "forms_", None) or {}
+    found = [_effect_words(e) + (f" in its {_effect_words(forms[e])} form" if e in forms else "")
+             + (f" ({', '.join(v)})" if v else "") for e, v in vals.items()]
     effects = found[0] if len(found) == 1 else ", ".join(found[:-1]) + " and " + found[-1]
     s = (f"Missing from the model: {effects}. With {'it' if len(found) == 1 else 'them'} the current fit rose "
          f"from {c0:.1f} % to {c1:.1f} %.")
@@ -793,7 +850,7 @@ def diagnosis_plain_headline(d) -> str:
 
 def _value_words(v, se, not_identifiable=False, unit="") -> str:
     """``20.7 ± 0.1 kg·m²``; words where the uncertainty is not a number."""
-    unit = f" {pretty_unit(unit)}" if unit else ""
+    unit = f" {pretty_unit(unit)}" if unit and unit != "-" else ""
     if v is None or not math.isfinite(v):
         return "not determined"
     if not_identifiable or se is None or not math.isfinite(se):
@@ -1040,10 +1097,12 @@ _DIAGNOSIS_SETTINGS = {
 }
 
 
-def _candidate_row(r, verdict: str, why: str) -> tuple:
-    """A candidate's row of the report's tables (header: see :func:`diagnosis_html`)."""
+def _candidate_row(r, verdict: str, why: str, names=None) -> tuple:
+    """A candidate's row of the report's tables (header: see :func:`diagnosis_html`); ``names``: the parameters
+    shown (default: the effect's)."""
+    names = _effect_params(r.effect) if names is None else names
     pars = "; ".join(f"{k} = {_value_words(v['value'], v['stderr'], k in r.not_identifiable, v['unit'])}"
-                     for k, v in r.parameters.items() if k in _effect_params(r.effect))
+                     for k, v in r.parameters.items() if k in names)
     return (r.effect, _bic_text(r.delta_bic), _bic_text(r.delta_bic_corrected), _signed(r.holdout_gain),
             _fit_text(r.fit_percent.get("current_A", math.nan)), pars or "-",
             f"{verdict}: {why}" + (". On bound: " + ", ".join(r.on_bound)) * bool(r.on_bound))
@@ -1094,6 +1153,15 @@ def diagnosis_html(d, figs=None) -> str:
         rows = [_candidate_row(r, *v) for r, v in zip(rnd, verdicts)]
         sel = {j for j, (v, _) in enumerate(verdicts) if v in ("added", "added by the swap check")}
         parts.append(table(header, rows, left=1, selected=sel, wrap=(5, 6)))
+    forms = form_verdicts(d)
+    if forms:
+        parts.append("<h3>Other forms of an added effect</h3><p>Once added, an effect with other forms is "
+                     "refitted in each, and a form is kept on the same evidence as a candidate, judged against "
+                     "the effect in its own form.</p>")
+        parts.append(table(header, [_candidate_row(_as_form(r, e, f), verdict, why,
+                                                   _effect_params(e) + _form_params_of(e, f))
+                                    for e, f, r, verdict, why in forms], left=1,
+                           selected={j for j, x in enumerate(forms) if x[3] == "kept"}, wrap=(5, 6)))
     removed = getattr(d, "removed_", None) or []
     if removed:
         parts.append("<h3>Effects added, then removed</h3><p>By the backward or the swap check on the fitting "

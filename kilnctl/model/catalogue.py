@@ -15,7 +15,7 @@ from typing import Callable
 
 from ..params import SPECS, Parameters
 
-__all__ = ["FreeParameter", "Effect"]
+__all__ = ["FreeParameter", "Form", "Effect"]
 
 
 @dataclass(frozen=True)
@@ -52,6 +52,43 @@ class FreeParameter:
         """Unit of the parameter (from its declaration)."""
         return SPECS[self.name].unit if self.name in SPECS else ""
 
+
+
+@dataclass(frozen=True)
+class Form:
+    """Another form of an effect: other components with more parameters, tried once the effect is selected.
+
+    A drive's speed feedback may be filtered by a second-order filter
+    rather than a first-order lag: the same effect (the controller sees the
+    speed late), another transfer function.  The diagnosis searches with the
+    effect's own form and, once the effect is selected, refits the model
+    with each form in its place; a form is kept only on the evidence every
+    candidate must give (see :meth:`kilnctl.measure.diagnose.Diagnosis.fit`).
+
+    Attributes
+    ----------
+    name : str
+        Name of the form (``second_order``).
+    meaning : str
+        What it describes, in a sentence.
+    components : tuple of str
+        Model components that replace the effect's ``components``.
+    parameters : tuple of FreeParameter
+        Fitted in addition to the effect's own parameters.
+    near : dict
+        Values of the added parameters at which the form behaves as the
+        effect's own form (nearly): the refit starts there too, so it never
+        ends worse than the model it refines.
+    starts : tuple of dict
+        Further starting values of the added parameters [unit of each].
+    """
+
+    name: str
+    meaning: str
+    components: tuple
+    parameters: tuple
+    near: dict
+    starts: tuple = ()
 
 
 @dataclass(frozen=True)
@@ -120,6 +157,9 @@ class Effect:
         mode to show).  A candidate whose refit ends there is not supported:
         it stands in for a difference the catalogue may lack.  Physics, not a
         usual range: it holds for any magnitude.
+    forms : tuple of Form
+        Other forms of the effect, each tried once the effect is selected
+        (a second-order speed filter for the first-order lag).
     spread : str or None
         A parameter whose starting points are spread over its decades for
         the local fits (:class:`~kilnctl.measure.calibrate.Starts`): where it
@@ -153,6 +193,7 @@ class Effect:
     relative_plausible: tuple = ()
     contradicts: Callable | None = field(repr=False, default=None)
     spread: str | None = None
+    forms: tuple = ()
 
     def applicable(self, params: Parameters, model: str) -> str | None:
         """Return None if the effect can be added to this base, else the reason it cannot.
@@ -232,4 +273,6 @@ class Effect:
                 "options": dict(self.options), "model": self.model, "signature": self.signature,
                 "parameters": [{"name": p.name, "unit": p.unit, "lower": p.lower, "upper": p.upper,
                                 "scale": p.kind} for p in self.parameters],
-                "plausible": {k: list(v) for k, v in self.plausible.items()}, "notes": self.notes}
+                "plausible": {k: list(v) for k, v in self.plausible.items()}, "notes": self.notes,
+                "forms": [{"name": f.name, "meaning": f.meaning, "components": list(f.components),
+                           "parameters": [p.name for p in f.parameters]} for f in self.forms]}

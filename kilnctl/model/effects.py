@@ -14,7 +14,7 @@ import casadi as ca
 
 from ..params import param
 from .base import Component, register
-from .catalogue import Effect, FreeParameter
+from .catalogue import Effect, Form, FreeParameter
 
 
 @register
@@ -47,7 +47,14 @@ class SpeedSensorLag(Component):
             plausible={"tau_s": (0.002, 0.006)}, null={"tau_s": 1e-4},
             notes="the record's speed_rpm is read as the sensor's reading, as a drive logs its speed feedback: "
                   "it lags the shaft like the controller's copy. "
-                  "Large lags can destabilise the loop: such trial runs are cut short and count as a poor fit."),
+                  "Large lags can destabilise the loop: such trial runs are cut short and count as a poor fit. "
+                  "Once selected, a second-order filter in its place is tried too.",
+            forms=(Form("second_order",
+                        "a second-order speed filter (tau_s s)^2/(4 zeta_s^2) + tau_s s + 1: a tuned filter that "
+                        "rings when zeta_s < 0.7, near a pure delay of tau_s at 0.87, a first-order lag of tau_s "
+                        "above 3",
+                        ("speed_sensor_filter",), (FreeParameter("zeta_s", 0.1, 10.0, "log", 0.7),),
+                        near={"zeta_s": 5.0}, starts=({"zeta_s": 0.5}, {"zeta_s": 0.7}, {"zeta_s": 1.0})),)),
     )
     requires = ("pid",)
 
@@ -62,6 +69,46 @@ class SpeedSensorLag(Component):
 
     def finish(self, e, mode):
         e.set_rate("omega_meas", e.sig["omega_fb_dot"])
+
+
+@register
+class SpeedSensorFilter(Component):
+    """Second-order filter of the speed sensor: the second-order form of ``speed_sensor_lag``.
+
+    (tau_s^2 / (4 zeta_s^2)) d2y/dt2 + tau_s dy/dt + y = omega_m, with y =
+    omega_meas: natural frequency omega_n = 2 zeta_s / tau_s [rad/s], and
+    at low frequencies the same delay tau_s as the first-order lag of that
+    time constant.  zeta_s = 0.5 rings (a peak of +15 % at 0.7 omega_n);
+    0.87 is the maximally flat delay (Bessel); above 3 the faster pole lies
+    more than 35 times further out and the filter is the first-order lag.
+    The controller and the record see y, as with the lag.
+    """
+
+    name = "speed_sensor_filter"
+    summary = "controller and record see the motor speed through a second-order filter (tau_s, zeta_s)"
+    param_names = ("tau_s", "zeta_s")
+    parameters = (
+        param("zeta_s", 0.7, "-", "assumed: a Butterworth speed filter",
+              "damping ratio of the second-order speed filter (component 'speed_sensor_filter')", "effects"),
+    )
+    requires = ("pid",)
+    # the effect's form: the catalogue entry is speed_sensor_lag's (Form 'second_order'), not a candidate of its own
+
+    def declare(self, spec):
+        spec.add_state("omega_meas", "rad/s", 50.0, "measured motor speed seen by the controller")
+        spec.add_state("omega_meas_dot", "rad/s^2", 10.0, "rate of the measured motor speed")
+
+    def signals(self, e, mode):
+        e.sig["omega_fb"] = e.x["omega_meas"]
+        e.sig["omega_log"] = e.x["omega_meas"]
+        e.sig["omega_fb_dot"] = e.x["omega_meas_dot"]
+
+    def finish(self, e, mode):
+        p = e.p
+        w_n = 2.0 * p.zeta_s / p.tau_s
+        e.set_rate("omega_meas", e.x["omega_meas_dot"])
+        e.set_rate("omega_meas_dot", w_n ** 2 * (e.x["omega_motor"] - e.x["omega_meas"]
+                                                 - p.tau_s * e.x["omega_meas_dot"]))
 
 
 @register
