@@ -79,3 +79,14 @@ def test_a_second_order_filters_record_keeps_the_lag_in_its_second_order_form(tm
     assert v["tau_s"] == pytest.approx(2 * zeta / w_n, rel=0.1)
     assert "second_order form" in d.summary()
     assert d.to_dict()["forms"] == {"speed_sensor_lag": "second_order"}
+
+
+def test_a_diagnosis_file_with_the_form_gives_the_filters_structure():
+    # truth: the JSON as `kilnctl diagnose --json` writes it (selected, forms); design and verify then run the
+    # filter that was fitted, not the first-order lag
+    from kilnctl.structure import Structure
+
+    d = {"selected": ["speed_sensor_lag", "second_motor"], "forms": {"speed_sensor_lag": "second_order"},
+         "final_parameters": {}, "settings": {"model": "macro"}}
+    assert Structure.from_diagnosis(d).effects == ("speed_sensor_filter", "second_motor")
+    assert Structure.from_diagnosis(dict(d, forms={})).effects == ("speed_sensor_lag", "second_motor")
