@@ -160,9 +160,8 @@ class Structure:
         forms = d.get("forms") or {}
         effects = []
         for e in d["selected"]:
-            form = next((f for f in CATALOGUE[e].forms if f.name == forms[e]), None) \
-                if e in forms and e in CATALOGUE else None
-            effects += list(form.components) if form is not None else [e]
+            known = {f.name: f for f in CATALOGUE[e].forms} if e in CATALOGUE else {}
+            effects += list(known[forms[e]].components) if forms.get(e) in known else [e]
         return cls(model or d.get("settings", {}).get("model") or "macro", tuple(effects))
 
     def __str__(self) -> str:

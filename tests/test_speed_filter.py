@@ -1,8 +1,10 @@
-"""The second-order speed filter (component ``speed_sensor_filter``, the ``second_order`` form of
-``speed_sensor_lag``), checked against independent truths: scipy.signal's simulation of the documented
-transfer function applied to the plant's own motor speed (a second method), and the ramp response of any
-filter with unit DC gain and denominator a s^2 + tau_s s + 1 (by hand: it trails a ramp of slope r by r tau_s,
-as the first-order lag of time constant tau_s does)."""
+"""The other forms of the speed sensor lag: the second-order filter (component ``speed_sensor_filter``, form
+``second_order``) and the delay before the lag (``speed_sensor_delay``, form ``delay``), checked against
+independent truths: scipy.signal's simulation of the documented transfer function applied to the plant's own
+motor speed (a second method); the ramp response of any filter with unit DC gain and denominator
+a s^2 + tau_s s + 1 (by hand: it trails a ramp of slope r by r tau_s, as the first-order lag of time constant
+tau_s does); the motor speed shifted by T_d by hand, then lagged; and the independently written plant's own
+filter, which a diagnosis must find."""
 
 import numpy as np
 import pytest
@@ -16,9 +18,9 @@ from kilnctl.simulate import resolve_gains, simulate
 SOFT = dict(gains="given", k_p=0.22, k_I=1.5, k_D=0.0)
 
 
-def _filter_run(tau_s, zeta_s):
-    p = resolve_gains(Parameters(tau_s=tau_s, zeta_s=zeta_s, **SOFT))
-    run = simulate(p, "macro", 12.0, effects=["speed_sensor_filter"], dt=1e-3)
+def _sensor_run(component, **values):
+    p = resolve_gains(Parameters(**values, **SOFT))
+    run = simulate(p, "macro", 12.0, effects=[component], dt=1e-3)
     # on a uniform grid (an event repeats its time: the state after it is kept)
     tt = np.asarray(run.t, float)
     _, idx = np.unique(tt[::-1], return_index=True)
@@ -31,7 +33,7 @@ def _filter_run(tau_s, zeta_s):
 @pytest.mark.parametrize("zeta_s", [0.5, 0.87, 5.0])
 def test_the_logged_speed_is_the_motor_speed_through_the_documented_filter(zeta_s):
     tau_s = 0.016  # s: with zeta_s 0.5 a 10 Hz filter (omega_n = 2 zeta_s / tau_s = 62.5 rad/s)
-    t, motor, logged = _filter_run(tau_s, zeta_s)
+    t, motor, logged = _sensor_run("speed_sensor_filter", tau_s=tau_s, zeta_s=zeta_s)
     _, y, _ = signal.lsim(signal.lti([1.0], [tau_s ** 2 / (4 * zeta_s ** 2), tau_s, 1.0]), motor, t)
     assert np.max(np.abs(logged - y)) < 2e-3 * np.max(motor)
     # on the ramp (3-6 s) the filter trails the motor by slope * tau_s, whatever zeta_s
@@ -40,14 +42,28 @@ def test_the_logged_speed_is_the_motor_speed_through_the_documented_filter(zeta_
     assert np.median(motor[mid] - logged[mid]) == pytest.approx(slope * tau_s, rel=0.05)
 
 
-def test_it_is_the_lags_second_order_form_and_adds_its_damping_ratio():
+def test_the_delay_form_logs_the_motor_speed_delayed_by_T_d_then_lagged():
+    # truth: the motor speed shifted by T_d by hand (interpolated), then the lag by scipy.signal.lsim
+    T_d, tau_s = 0.03, 0.002
+    t, motor, logged = _sensor_run("speed_sensor_delay", tau_s=tau_s, T_d=T_d)
+    shifted = np.interp(t - T_d, t, motor, left=0.0)
+    _, y, _ = signal.lsim(signal.lti([1.0], [tau_s, 1.0]), shifted, t)
+    assert np.max(np.abs(logged - y)) < 2e-3 * np.max(motor)
+    # on the ramp the sensor trails the motor by slope * (T_d + tau_s)
+    mid = (t > 3.0) & (t < 6.0)
+    slope = np.median(np.gradient(motor, t)[mid])
+    assert np.median(motor[mid] - logged[mid]) == pytest.approx(slope * (T_d + tau_s), rel=0.05)
+
+
+def test_the_filter_and_the_delay_are_forms_of_the_lag_not_candidates():
     # the catalogue: one effect (the controller sees the speed late), the filter a form of it, never a
     # candidate of its own; near zeta_s 5 it is the first-order lag (poles 97 times apart)
     forms = CATALOGUE["speed_sensor_lag"].forms
-    assert [f.name for f in forms] == ["second_order"]
+    assert [f.name for f in forms] == ["second_order", "delay"]
     assert forms[0].components == ("speed_sensor_filter",)
+    assert forms[1].components == ("speed_sensor_delay",)
     assert [fp.name for fp in forms[0].parameters] == ["zeta_s"]
-    assert "speed_sensor_filter" not in CATALOGUE
+    assert "speed_sensor_filter" not in CATALOGUE and "speed_sensor_delay" not in CATALOGUE
     z = forms[0].near["zeta_s"]
     fast, slow = z + np.sqrt(z * z - 1), z - np.sqrt(z * z - 1)
     assert fast / slow > 90
@@ -90,3 +106,55 @@ def test_a_diagnosis_file_with_the_form_gives_the_filters_structure():
          "final_parameters": {}, "settings": {"model": "macro"}}
     assert Structure.from_diagnosis(d).effects == ("speed_sensor_filter", "second_motor")
     assert Structure.from_diagnosis(dict(d, forms={})).effects == ("speed_sensor_lag", "second_motor")
+
+
+@pytest.mark.parametrize("supported, kept", [({"second_order": True, "delay": True}, "delay"),
+                                             ({"second_order": True, "delay": False}, "second_order"),
+                                             ({"second_order": False, "delay": False}, None)])
+def test_a_supported_candidate_is_judged_in_its_supported_form_of_lowest_bic(supported, kept):
+    # truth: hand-made refits and verdicts (the delay's BIC the lower); only the choice is tested: a form
+    # counts only when supported against the candidate's own form, the lowest BIC among those, and the
+    # candidate's result is then its evidence in that form against the current model
+    from types import SimpleNamespace
+
+    from kilnctl.measure.diagnose import Diagnosis
+    from kilnctl.measure.evidence import CandidateResult
+
+    d = Diagnosis(Parameters())
+    d.form_results_ = []
+    bic = {None: -20.0, "second_order": -50.0, "delay": -80.0}
+    current = SimpleNamespace(values_={"mu_c": 0.4}, bic_=0.0, form="current")
+    own = SimpleNamespace(values_={"mu_c": 0.4, "tau_s": 0.02}, bic_=bic[None], form=None)
+    seen = []
+
+    def calibrate(m, params, effects, scales, mask, init, starts, *a):
+        form = d._forms["speed_sensor_lag"]
+        seen.append((effects, form, init, starts[0]))
+        return SimpleNamespace(values_=dict(init), bic_=bic[form], form=form)
+
+    def evidence(m, e, cal, against, *a):
+        ok = supported[cal.form] if against is own else True
+        return CandidateResult(e, cal.bic_ - against.bic_, 0.0, {}, {}, {}, [], [], ok, f"vs {against.form}", 0.0,
+                               calibration=cal)
+
+    d._calibrate = calibrate
+    d._first_failure = lambda *a: None
+    d._evidence = evidence
+    r0 = CandidateResult("speed_sensor_lag", -20.0, 5.0, {}, {}, {}, [], [], True, "", 1.0, calibration=own)
+    other = CandidateResult("second_motor", -30.0, 5.0, {}, {}, {}, [], [], True, "", 1.0, calibration=own)
+    out = d._in_best_form(None, None, ["current_limit"], [other, r0], current, None, None, None, None, None,
+                          lambda s: None)
+    # each form refitted with the candidate added, from its values, the added parameter where it is nearly
+    # the lag; a candidate without forms is left alone
+    assert [(e, f, i) for e, f, i, _ in seen] == [
+        (("current_limit", "speed_sensor_lag"), "second_order", {"mu_c": 0.4, "tau_s": 0.02, "zeta_s": 5.0}),
+        (("current_limit", "speed_sensor_lag"), "delay", {"mu_c": 0.4, "tau_s": 0.02, "T_d": 1e-3})]
+    assert seen[0][3] == {"tau_s": 0.8 * 0.02, "zeta_s": 0.5}
+    assert d._forms == {}  # the form belongs to the candidate's result until it is added
+    assert out[0] is other
+    if kept is None:
+        assert out[1] is r0
+    else:
+        assert out[1].form == kept and out[1].delta_bic == bic[kept] and out[1].reason == "vs current"
+    assert [x[3] for x in d.form_results_] == [f == kept for f in ("second_order", "delay")]
+    assert all(x[4] == ("current_limit",) for x in d.form_results_)

@@ -21,10 +21,10 @@ The procedure (``docs/tutorial_diagnose.md``):
    fitted by a kiln unbalance); a spurious effect gains nothing on the held-out
    part (the tests: :func:`~kilnctl.measure.evidence.judge`);
 5. add the supported candidate with the lowest BIC, and repeat (greedy) until
-   no candidate is supported; an effect with other forms (a second-order
-   speed filter for the first-order lag) is refitted in each, once it is
-   added, and a form is kept on the evidence of step 4 against the effect's
-   own form;
+   no candidate is supported; a supported candidate with other forms (a
+   second-order filter or a delay for the first-order speed lag) is refitted
+   in each and judged in its best form, a form counting on the evidence of
+   step 4 against the effect's own form;
 6. check the selection: remove an effect that no longer earns its place once
    later ones are in (backward check), and put in a rival that its round's
    winner beat by less than the BIC threshold when the model with it fits
@@ -38,6 +38,7 @@ The procedure (``docs/tutorial_diagnose.md``):
 from __future__ import annotations
 
 import copy
+import dataclasses
 import math
 import time
 from concurrent.futures.process import BrokenProcessPool
@@ -85,8 +86,6 @@ INERTIA_STEPS, INERTIA_SPAN = 11, 0.1
 SETUP_FAR = 0.1
 #: that search screens this many times as many starting points as it fits (see Calibration.fit, ``screen``)
 SCREEN = 2
-#: a form is refitted from the effect's own fitted parameters times these factors (see Diagnosis._try_forms)
-FORM_FACTORS = (0.8, 1.0, 1.25, 1.6)
 
 
 class Diagnosis:
@@ -185,9 +184,11 @@ class Diagnosis:
         {effect the swap check put in: the selected effect it replaced}.
     forms_ : dict
         {selected effect: the name of the :class:`~kilnctl.model.catalogue.Form` it is fitted in}, for the
-        effects whose other form the evidence kept (see :meth:`_try_forms`).
-    form_results_ : list of (str, str, CandidateResult)
-        Every form tried: the effect, the form's name, and its evidence against the effect's own form.
+        effects added in another form (see :meth:`_in_best_form`).
+    form_results_ : list of [str, str, CandidateResult, bool, tuple]
+        Every form tried (see :meth:`_in_best_form`): the effect, the form's name, its evidence against the
+        effect in its own form, whether the candidate was then judged in it (the supported form of lowest
+        BIC), and the effects of the model it was a candidate for.
     swap_tried_ : set of tuple
         The (winner, rival) pairs the swap check refitted with the rival in the winner's place.
     final_search_ : dict
@@ -237,7 +238,7 @@ class Diagnosis:
         if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
             raise ModelError(f"workers = {workers!r} must be a positive integer (processes refitting candidates)")
         self.workers = workers
-        self._forms: dict = {}  # effect -> the Form it is fitted in (during a fit; the workers' copy has it)
+        self._forms: dict = {}  # effect -> the name of the form it is fitted in (during a fit; workers get it)
 
     # --- structure of a model: base model + effects ------------------------------------
     def _cyclic(self, effects) -> tuple:
@@ -259,12 +260,13 @@ class Diagnosis:
             if CATALOGUE[e].model is not None:
                 model = CATALOGUE[e].model
         forms = getattr(self, "_forms", {})
-        names = [c for e in effects for c in (forms[e].components if e in forms else (e,))]
+        form = {e: CATALOGUE[e].form(forms[e]) for e in effects if e in forms}
+        names = [c for e in effects for c in (form[e].components if e in form else (e,))]
         comps, p = effect_components(names, params, model=model)
         free = list(self.calibrate)
         for e in effects:
             have = {f if isinstance(f, str) else f.name for f in free}
-            own = CATALOGUE[e].parameters + (forms[e].parameters if e in forms else ())
+            own = CATALOGUE[e].parameters + (form[e].parameters if e in form else ())
             free += [fp for fp in own if fp.name not in have]
         return model, comps, p, free
 
@@ -469,6 +471,8 @@ class Diagnosis:
             if self._rugged(tuple(selected)):
                 results = self._again_from_setup(m, params, selected, names, current, scales, train, test, exp,
                                                  pool, say, results)
+            results = self._in_best_form(m, params, selected, results, current, scales, train, test, exp, pool,
+                                         say)
             results.sort(key=_rank)
             anchored, results = self._reanchor(m, params, selected, current, results, scales, train, test, exp, say)
             n_fit = sum(anchored.n_.values())
@@ -481,6 +485,8 @@ class Diagnosis:
                 say("  candidates refitted from the re-anchored model")
                 results = self._try_all(m, params, selected, names, current, scales, train, test, exp, pool, say,
                                         before)
+                results = self._in_best_form(m, params, selected, results, current, scales, train, test, exp,
+                                             pool, say)
                 results.sort(key=_rank)
                 current, results = self._reanchor(m, params, selected, current, results, scales, train, test, exp,
                                                   say)
@@ -507,11 +513,11 @@ class Diagnosis:
             for e in best.effect.split("+"):  # a pair adds both of its effects
                 selected.append(e)
                 added[e] = best
+            if best.form is not None:
+                self._forms[best.effect] = best.form
             current = best.calibration
-            say(f"added {best.effect}")
-            current = self._try_forms(m, params, selected, best.effect.split("+"), current, scales, train, test,
-                                      exp, say)
             fitted[tuple(sorted(selected))] = current
+            say(f"added {best.effect}" + (f" in its {best.form} form" if best.form else ""))
         selected, current, self.removed_ = self._backward(m, params, selected, current, fitted, scales, train, test,
                                                           exp, pool, say)
         selected, current, swapped, self.swaps_ = self._swap(m, params, selected, current, added, rounds, scales,
@@ -528,7 +534,7 @@ class Diagnosis:
         self.final_search_ = _search_summary(final)
         selected, final, dropped = self._final_check(m, params, selected, final, scales, train, test, exp, say)
         self.swaps_ = {k: v for k, v in self.swaps_.items() if k in selected}
-        self.forms_ = {e: f.name for e, f in self._forms.items() if e in selected}
+        self.forms_ = {e: f for e, f in self._forms.items() if e in selected}
         self.removed_ = list(self.removed_) + dropped
         self.final_search_["then_removed"] = [r.effect for r in dropped]
         self.base_calibration_ = base
@@ -566,46 +572,79 @@ class Diagnosis:
             f"({self.wall_s_:.1f} s)")
         return self
 
-    def _try_forms(self, m, params, selected, new, current, scales, train, test, exp, say) -> Calibration:
-        """Refit the model with each other form of the effects just added (``new``); keep a form on the evidence.
+    def _in_best_form(self, m, params, selected, results, current, scales, train, test, exp, pool, say) -> list:
+        """Each supported candidate with other forms (:attr:`Effect.forms`) refitted in each form (in parallel
+        when a pool is given); the candidate is judged in its best form.
 
-        The refit starts where the form behaves as the effect's own (:attr:`Form.near`), so it never ends worse
-        than ``current``, and from the form's starts with the effect's own fitted parameters times
-        :data:`FORM_FACTORS` (a first-order lag fitted to a second-order filter's record ends about 20 % short
-        of the filter's low-frequency delay).  A form is kept when :func:`~kilnctl.measure.evidence.judge`
-        supports it against ``current``, the effect in its own form: the tests every candidate passes, with
-        the form's added parameters counted.  The first form kept ends the effect's search.
-
-        Returns
-        -------
-        Calibration
-            ``current``, or the refit in the kept form.
+        Each form is refitted from the candidate's fitted values with the form's added parameters where it
+        behaves nearly as the effect's own form (:attr:`Form.near`), so it ends about as well as the
+        candidate at worst, and from the form's own starts (:attr:`Form.starts`, from those values).  A form
+        is supported when :func:`~kilnctl.measure.evidence.judge` supports it against the candidate in its
+        own form (the tests every candidate passes, the form's added parameters counted).  Of the supported
+        forms the one of lowest BIC replaces the candidate's result, judged again against ``current``, with
+        :attr:`CandidateResult.form` set: the round then ranks the effect by its best form (a lag ranked below
+        a compliance on a record of a 25 ms delay, whose ringing the compliance imitated).  Every form tried
+        is listed in ``form_results_``.
         """
-        for name in new:
-            own = [k for fp in CATALOGUE[name].parameters for k in (fp.name, fp.partner) if k]
-            for form in CATALOGUE[name].forms:
-                t_start = time.perf_counter()
-                self._forms[name] = form
-                starts = [dict(g, **{k: f * current.values_[k] for k in own if k in current.values_})
-                          for g in (form.near,) + tuple(form.starts) for f in FORM_FACTORS]
+        jobs = [(i, form) for i, r in enumerate(results) if r.supported and r.calibration is not None
+                and r.form is None for form in CATALOGUE[r.effect].forms]
+        if not jobs:
+            return results
+        ff = self._first_failure(m, current, exp)
+        args = []
+        for i, form in jobs:
+            own = dict(results[i].calibration.values_)
+            args.append((dict(self._forms, **{results[i].effect: form.name}),
+                         (m, params, tuple(selected) + (results[i].effect,), scales, train, dict(own, **form.near),
+                          list(form.starts(own)), exp, ff, results[i].effect)))
+        t_start = time.perf_counter()
+        if pool is not None and len(jobs) > 1:
+            light = self._settings()
+            futures = [pool.submit(_form_calibrate_job, (light, forms, a)) for forms, a in args]
+            cals = []
+            for f in futures:
                 try:
-                    cal = self._calibrate(m, params, tuple(selected), scales, train,
-                                          dict(current.values_, **form.near), starts, experiment=exp,
-                                          first_failure=self._first_failure(m, current, exp), new_effect=name)
-                except KilnctlError as exc:
-                    del self._forms[name]
-                    say(f"  {name} as {form.name}: could not be fitted: {exc}")
-                    continue
-                r = self._evidence(m, name, cal, current, scales, train, test, exp, time.perf_counter() - t_start)
-                self.form_results_.append((name, form.name, r))
-                say(f"  {name} as {form.name}: dBIC {r.delta_bic:+10.1f} (whitened {r.delta_bic_corrected:+8.1f})  "
-                    f"held-out gain {r.holdout_gain:+6.1f} % (z {r.holdout_z:+5.1f})  "
-                    f"{'kept' if r.supported else '-'}")
-                if r.supported:
-                    current = cal
-                    break
-                del self._forms[name]
-        return current
+                    cals.append(f.result())
+                except KilnctlError:
+                    cals.append(None)
+        else:
+            cals = [self._calibrate_in(forms, a) for forms, a in args]
+        wall = (time.perf_counter() - t_start) / len(jobs)
+        best: dict = {}
+        for (i, form), cal in zip(jobs, cals):
+            r = results[i]
+            if cal is None:
+                say(f"  {r.effect} as {form.name}: could not be fitted")
+                continue
+            ev = self._evidence(m, r.effect, cal, r.calibration, scales, train, test, exp, wall)
+            entry = [r.effect, form.name, ev, False, tuple(selected)]
+            self.form_results_.append(entry)
+            say(f"  {r.effect} as {form.name}: dBIC {ev.delta_bic:+10.1f} (whitened {ev.delta_bic_corrected:+8.1f})"
+                f"  held-out gain {ev.holdout_gain:+6.1f} % (z {ev.holdout_z:+5.1f})  against its own form  "
+                f"{'supported' if ev.supported else '-'}")
+            if ev.supported and (i not in best or cal.bic_ < best[i][1].bic_):
+                best[i] = (form.name, cal, entry)
+        results = list(results)
+        for i, (name, cal, entry) in best.items():
+            entry[3] = True
+            r = self._evidence(m, results[i].effect, cal, current, scales, train, test, exp,
+                               results[i].wall_s + wall)
+            results[i] = dataclasses.replace(r, form=name)
+            say(f"  {r.effect:<22} in its {name} form: dBIC {r.delta_bic:+10.1f} (whitened "
+                f"{r.delta_bic_corrected:+8.1f})  {'supported' if r.supported else '-'}")
+        return results
+
+    def _calibrate_in(self, forms, args):
+        """:meth:`_calibrate` on ``args`` with the effects in ``forms`` ({effect: form name}); None if it
+        fails."""
+        saved = self._forms
+        self._forms = forms
+        try:
+            return self._calibrate(*args)
+        except KilnctlError:
+            return None
+        finally:
+            self._forms = saved
 
     def _stick_slip_missing(self, m, current, exp) -> bool:
         """True when the record's current falls sharply again and again after the ramp (stick-slip
@@ -1375,6 +1414,16 @@ def _calibrate_job(job):
     cal = diag._calibrate(*args)
     cal._problem = None
     cal.run_.response = None
+    return cal
+
+
+def _form_calibrate_job(job):
+    """Worker side of Diagnosis._calibrate_in, without the raw simulation (None when the fit fails)."""
+    diag, forms, args = job
+    cal = diag._calibrate_in(forms, args)
+    if cal is not None:
+        cal._problem = None
+        cal.run_.response = None
     return cal
 
 

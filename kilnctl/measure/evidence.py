@@ -195,6 +195,9 @@ class CandidateResult:
         The refit improved the fit enough to be supported, but its values
         contradict the effect's own signature (:attr:`Effect.contradicts`):
         it stands in for another difference.
+    form : str or None
+        The other form of the effect (:attr:`Effect.forms`) the result is in,
+        None for the effect's own.
     """
 
     effect: str
@@ -213,6 +216,7 @@ class CandidateResult:
     delta_bic_corrected: float = math.nan
     holdout_z: float = math.nan
     stand_in: bool = False
+    form: str | None = None
 
     def to_dict(self) -> dict:
         """Return the result as a JSON-ready dictionary."""
@@ -225,7 +229,7 @@ class CandidateResult:
                 "on_bound": list(self.on_bound), "not_identifiable": list(self.not_identifiable),
                 "supported": self.supported, "reason": self.reason, "wall_s": self.wall_s,
                 "heldout_share": _num(self.heldout_share), "delta_bic_corrected": _num(self.delta_bic_corrected),
-                "holdout_z": _num(self.holdout_z), "stand_in": self.stand_in}
+                "holdout_z": _num(self.holdout_z), "stand_in": self.stand_in, "form": self.form}
 
 
 #: current fit [%] from which the current model's residual is taken to be mostly noise (see :func:`judge`)

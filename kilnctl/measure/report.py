@@ -364,8 +364,8 @@ def _effect_params(effect) -> tuple[str, ...]:
 
 def _form_params_of(effect, name) -> tuple[str, ...]:
     """The parameters the form ``name`` of an effect adds to the effect's own (none for another name)."""
-    form = next((f for f in CATALOGUE[effect].forms if f.name == name), None)
-    return tuple(fp.name for fp in form.parameters) if form is not None else ()
+    forms = {f.name: f for f in CATALOGUE[effect].forms}
+    return tuple(fp.name for fp in forms[name].parameters) if name in forms else ()
 
 
 def _form_params(d, effect) -> tuple[str, ...]:
@@ -375,7 +375,7 @@ def _form_params(d, effect) -> tuple[str, ...]:
 
 def _as_form(r, effect, form):
     """A form's evidence under the name ``effect (form form)`` for the summary's and the report's rows."""
-    return dataclasses.replace(r, effect=f"{effect} ({form} form)")
+    return dataclasses.replace(r, effect=f"{effect} ({form} form)", form=None)
 
 
 def _fitted_effect_params(d):
@@ -386,7 +386,7 @@ def _fitted_effect_params(d):
 
 
 def form_verdicts(d) -> list[tuple]:
-    """Every other form of an added effect the diagnosis tried, with its verdict.
+    """Every other form of a supported candidate the diagnosis tried, with its verdict.
 
     Parameters
     ----------
@@ -395,13 +395,17 @@ def form_verdicts(d) -> list[tuple]:
 
     Returns
     -------
-    list of (str, str, CandidateResult, str, str)
-        The effect, the form's name, its evidence against the effect in its own form, ``kept`` or ``not
-        kept``, and why (the evidence's own reason).
+    list of (str, str, CandidateResult, str, str, str)
+        The effect, the form's name, its evidence against the candidate in its own form, ``judged in it``
+        (the supported form of lowest BIC, in which the round then judged the candidate) or ``not used``,
+        why (the evidence's own reason), and the model it was a candidate for (``base + ...``).
     """
-    kept = getattr(d, "forms_", None) or {}
-    return [(e, f, r, "kept" if r.supported and kept.get(e) == f else "not kept", r.reason)
-            for e, f, r in getattr(d, "form_results_", None) or []]
+    out = []
+    for e, f, r, chosen, against in getattr(d, "form_results_", None) or []:
+        why = r.reason if chosen or not r.supported else f"{r.reason}; another form has the lower BIC"
+        out.append((e, f, r, "judged in it" if chosen else "not used", why,
+                    "base + " + ", ".join(against) if against else "the base"))
+    return out
 
 
 def _selected_names(d) -> list[str]:
@@ -440,7 +444,8 @@ def greedy_order(d) -> list[str]:
 
 def _added_in(rounds) -> list[str]:
     """The first candidate of each of ``rounds`` that added one (it is supported)."""
-    return [rnd[0].effect for rnd in rounds if rnd and rnd[0].supported]
+    return [rnd[0].effect + (f" ({rnd[0].form} form)" if rnd[0].form else "") for rnd in rounds
+            if rnd and rnd[0].supported]
 
 
 def round_model(d, i: int, base: str = "the base") -> str:
@@ -461,9 +466,6 @@ def round_model(d, i: int, base: str = "the base") -> str:
     str
     """
     before = _added_in(d.rounds_[:i])
-    # an effect refitted in another form right after its round: the later rounds ran against that form
-    forms = {e: f for e, f, r in getattr(d, "form_results_", None) or [] if r.supported}
-    before = [f"{e} ({forms[e]} form)" if e in forms else e for e in before]
     return base if not before else "base + " + ", ".join(before)
 
 
@@ -601,7 +603,8 @@ def diagnosis_dict(d) -> dict:
         "removed": [_result_dict(r, "removed", r.reason) for r in getattr(d, "removed_", None) or []],
         "swaps": dict(getattr(d, "swaps_", None) or {}),
         "forms": dict(getattr(d, "forms_", None) or {}),
-        "forms_tried": [dict(_result_dict(r, verdict, why), form=f) for _, f, r, verdict, why in form_verdicts(d)],
+        "forms_tried": [dict(_result_dict(r, verdict, why), form=f, candidate_for=against)
+                        for _, f, r, verdict, why, against in form_verdicts(d)],
         "final": {k: json_number(v) for k, v in d.final_.items()},
         "final_parameters": _params_dict(fc),
         "final_search": dict(getattr(d, "final_search_", {})),
@@ -650,7 +653,8 @@ def _summary_rows(r, verdict: str, why: str) -> list[str]:
     """A candidate's row of the summary's table, then why, wrapped."""
     gain = f"{_signed(r.holdout_gain)} %" if math.isfinite(r.holdout_gain) else "-"
     fi = _fit_text(r.fit_percent.get("current_A", math.nan))
-    return ([f"    {r.effect:<22} {_bic_text(r.delta_bic):>9} {_bic_text(r.delta_bic_corrected):>14} {gain:>9} "
+    label = r.effect + (f" ({r.form} form)" if r.form else "")
+    return ([f"    {label:<22} {_bic_text(r.delta_bic):>9} {_bic_text(r.delta_bic_corrected):>14} {gain:>9} "
              f"{fi:>6}  {verdict}"] + _wrap(f"why: {why}", " " * 8, 5))
 
 
@@ -684,10 +688,10 @@ def diagnosis_summary(d) -> str:
         lines += [x for r in rnd for x in _summary_rows(r, *candidate_verdict(d, i, r))]
     forms = form_verdicts(d)
     if forms:
-        lines += _wrap("other forms of an added effect, each against the effect in its own form", "  ")
+        lines += _wrap("other forms of a supported candidate, each against the candidate in its own form", "  ")
         lines.append(head)
-        lines += [x for e, f, r, verdict, why in forms
-                  for x in _summary_rows(_as_form(r, e, f), verdict, why)]
+        lines += [x for e, f, r, verdict, why, against in forms
+                  for x in _summary_rows(_as_form(r, e, f), verdict, f"as a candidate for {against}: {why}")]
     removed = getattr(d, "removed_", None) or []
     if removed:
         lines += _wrap("effects added, then removed (by the backward or the swap check on the fitting part, or "
@@ -1100,10 +1104,12 @@ _DIAGNOSIS_SETTINGS = {
 def _candidate_row(r, verdict: str, why: str, names=None) -> tuple:
     """A candidate's row of the report's tables (header: see :func:`diagnosis_html`); ``names``: the parameters
     shown (default: the effect's)."""
-    names = _effect_params(r.effect) if names is None else names
+    if names is None:
+        names = _effect_params(r.effect) + (_form_params_of(r.effect, r.form) if r.form else ())
     pars = "; ".join(f"{k} = {_value_words(v['value'], v['stderr'], k in r.not_identifiable, v['unit'])}"
                      for k, v in r.parameters.items() if k in names)
-    return (r.effect, _bic_text(r.delta_bic), _bic_text(r.delta_bic_corrected), _signed(r.holdout_gain),
+    label = r.effect + (f" ({r.form} form)" if r.form else "")
+    return (label, _bic_text(r.delta_bic), _bic_text(r.delta_bic_corrected), _signed(r.holdout_gain),
             _fit_text(r.fit_percent.get("current_A", math.nan)), pars or "-",
             f"{verdict}: {why}" + (". On bound: " + ", ".join(r.on_bound)) * bool(r.on_bound))
 
@@ -1155,13 +1161,14 @@ def diagnosis_html(d, figs=None) -> str:
         parts.append(table(header, rows, left=1, selected=sel, wrap=(5, 6)))
     forms = form_verdicts(d)
     if forms:
-        parts.append("<h3>Other forms of an added effect</h3><p>Once added, an effect with other forms is "
-                     "refitted in each, and a form is kept on the same evidence as a candidate, judged against "
-                     "the effect in its own form.</p>")
-        parts.append(table(header, [_candidate_row(_as_form(r, e, f), verdict, why,
+        parts.append("<h3>Other forms of a supported candidate</h3><p>A supported candidate with other forms "
+                     "is refitted in each; a form counts on the same evidence as a candidate, judged against the "
+                     "candidate in its own form, and the round judges the candidate in its best form.</p>")
+        parts.append(table(header, [_candidate_row(_as_form(r, e, f), verdict,
+                                                   f"as a candidate for {against}: {why}",
                                                    _effect_params(e) + _form_params_of(e, f))
-                                    for e, f, r, verdict, why in forms], left=1,
-                           selected={j for j, x in enumerate(forms) if x[3] == "kept"}, wrap=(5, 6)))
+                                    for e, f, r, verdict, why, against in forms], left=1,
+                           selected={j for j, x in enumerate(forms) if x[3] == "judged in it"}, wrap=(5, 6)))
     removed = getattr(d, "removed_", None) or []
     if removed:
         parts.append("<h3>Effects added, then removed</h3><p>By the backward or the swap check on the fitting "

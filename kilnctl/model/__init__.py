@@ -29,8 +29,8 @@ __all__ = ["MODELS", "ORDER", "component_names", "phase_rank", "Plant", "get_pla
 
 #: phase order of the components: signals flow from the ramp to the stress
 ORDER: tuple[str, ...] = (
-    "ramp", "speed_sensor_lag", "speed_sensor_filter", "pid", "voltage_limit", "dc_motor", "current_limit",
-    "second_motor", "gearbox", "drivetrain_compliance", "coupling", "pinion", "mesh",
+    "ramp", "speed_sensor_lag", "speed_sensor_filter", "speed_sensor_delay", "pid", "voltage_limit", "dc_motor",
+    "current_limit", "second_motor", "gearbox", "drivetrain_compliance", "coupling", "pinion", "mesh",
     "kiln", "kiln_fixed", "bearing_friction", "viscous_drag", "kiln_unbalance", "burden", "bending_stress",
 )
 

@@ -58,17 +58,18 @@ class FreeParameter:
 class Form:
     """Another form of an effect: other components with more parameters, tried once the effect is selected.
 
-    A drive's speed feedback may be filtered by a second-order filter
-    rather than a first-order lag: the same effect (the controller sees the
-    speed late), another transfer function.  The diagnosis searches with the
-    effect's own form and, once the effect is selected, refits the model
-    with each form in its place; a form is kept only on the evidence every
-    candidate must give (see :meth:`kilnctl.measure.diagnose.Diagnosis.fit`).
+    A drive's speed feedback may pass a second-order filter or a transport
+    delay rather than a first-order lag: the same effect (the controller
+    sees the speed late), another transfer function.  The diagnosis searches
+    with the effect's own form and, once the effect is selected, refits the
+    model with each form in its place; the best form is kept only on the
+    evidence every candidate must give (see
+    :meth:`kilnctl.measure.diagnose.Diagnosis.fit`).
 
     Attributes
     ----------
     name : str
-        Name of the form (``second_order``).
+        Name of the form (``second_order``, ``delay``).
     meaning : str
         What it describes, in a sentence.
     components : tuple of str
@@ -76,11 +77,13 @@ class Form:
     parameters : tuple of FreeParameter
         Fitted in addition to the effect's own parameters.
     near : dict
-        Values of the added parameters at which the form behaves as the
-        effect's own form (nearly): the refit starts there too, so it never
-        ends worse than the model it refines.
-    starts : tuple of dict
-        Further starting values of the added parameters [unit of each].
+        Values of the added parameters at which the form behaves nearly as
+        the effect's own form: the refit starts there (with the effect's
+        fitted values), so it ends about as well as the effect's own form at
+        worst.
+    starts : callable
+        ``starts(values) -> list of dict``: further starting points, from
+        the effect's fitted values (the model's ``values``) [unit of each].
     """
 
     name: str
@@ -88,7 +91,7 @@ class Form:
     components: tuple
     parameters: tuple
     near: dict
-    starts: tuple = ()
+    starts: Callable = field(repr=False, default=lambda values: [])
 
 
 @dataclass(frozen=True)
@@ -194,6 +197,19 @@ class Effect:
     contradicts: Callable | None = field(repr=False, default=None)
     spread: str | None = None
     forms: tuple = ()
+
+    def form(self, name: str) -> Form:
+        """The other form called ``name`` (:attr:`forms`).
+
+        Raises
+        ------
+        KeyError
+            The effect has no form of that name.
+        """
+        for f in self.forms:
+            if f.name == name:
+                return f
+        raise KeyError(f"effect {self.name!r} has no form {name!r} (forms: {[f.name for f in self.forms]})")
 
     def applicable(self, params: Parameters, model: str) -> str | None:
         """Return None if the effect can be added to this base, else the reason it cannot.
