@@ -108,13 +108,17 @@ def test_a_diagnosis_file_with_the_form_gives_the_filters_structure():
     assert Structure.from_diagnosis(dict(d, forms={})).effects == ("speed_sensor_lag", "second_motor")
 
 
-@pytest.mark.parametrize("supported, kept", [({"second_order": True, "delay": True}, "delay"),
-                                             ({"second_order": True, "delay": False}, "second_order"),
-                                             ({"second_order": False, "delay": False}, None)])
-def test_a_supported_candidate_is_judged_in_its_supported_form_of_lowest_bic(supported, kept):
+@pytest.mark.parametrize("supported, pinned, kept", [
+    ({"second_order": True, "delay": True}, (), "delay"),
+    ({"second_order": True, "delay": False}, (), "second_order"),
+    ({"second_order": False, "delay": False}, (), None),
+    ({"second_order": True, "delay": True}, ("T_d",), "second_order"),  # the delay's own parameter on a bound
+])
+def test_a_supported_candidate_is_judged_in_its_supported_form_of_lowest_bic(supported, pinned, kept):
     # truth: hand-made refits and verdicts (the delay's BIC the lower); only the choice is tested: a form
-    # counts only when supported against the candidate's own form, the lowest BIC among those, and the
-    # candidate's result is then its evidence in that form against the current model
+    # counts only when supported against the candidate's own form and none of its added parameters ends on
+    # a bound, the lowest BIC among those, and the candidate's result is then its evidence in that form
+    # against the current model
     from types import SimpleNamespace
 
     from kilnctl.measure.diagnose import Diagnosis
@@ -130,7 +134,8 @@ def test_a_supported_candidate_is_judged_in_its_supported_form_of_lowest_bic(sup
     def calibrate(m, params, effects, scales, mask, init, starts, *a):
         form = d._forms["speed_sensor_lag"]
         seen.append((effects, form, init, starts[0]))
-        return SimpleNamespace(values_=dict(init), bic_=bic[form], form=form)
+        return SimpleNamespace(values_=dict(init), bic_=bic[form], form=form,
+                               on_bound_=[k for k in pinned if k in init])
 
     def evidence(m, e, cal, against, *a):
         ok = supported[cal.form] if against is own else True
@@ -157,4 +162,7 @@ def test_a_supported_candidate_is_judged_in_its_supported_form_of_lowest_bic(sup
     else:
         assert out[1].form == kept and out[1].delta_bic == bic[kept] and out[1].reason == "vs current"
     assert [x[3] for x in d.form_results_] == [f == kept for f in ("second_order", "delay")]
+    if pinned:
+        delay = d.form_results_[1][2]
+        assert not delay.supported and delay.stand_in and "T_d ended on a bound" in delay.reason
     assert all(x[4] == ("current_limit",) for x in d.form_results_)
