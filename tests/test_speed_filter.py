@@ -139,8 +139,9 @@ def test_a_supported_candidate_is_judged_in_its_supported_form_of_lowest_bic(sup
 
     def evidence(m, e, cal, against, *a):
         ok = supported[cal.form] if against is own else True
+        # as Diagnosis._evidence: the result names the form its refit is in
         return CandidateResult(e, cal.bic_ - against.bic_, 0.0, {}, {}, {}, [], [], ok, f"vs {against.form}", 0.0,
-                               calibration=cal)
+                               calibration=cal, form=getattr(cal, "form_", None))
 
     d._calibrate = calibrate
     d._first_failure = lambda *a: None

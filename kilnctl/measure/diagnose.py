@@ -38,7 +38,6 @@ The procedure (``docs/tutorial_diagnose.md``):
 from __future__ import annotations
 
 import copy
-import dataclasses
 import math
 import time
 from concurrent.futures.process import BrokenProcessPool
@@ -601,17 +600,7 @@ class Diagnosis:
                          (m, params, tuple(selected) + (results[i].effect,), scales, train, dict(own, **form.near),
                           list(form.starts(own)), exp, ff, results[i].effect, 1)))
         t_start = time.perf_counter()
-        if pool is not None and len(jobs) > 1:
-            light = self._settings()
-            futures = [pool.submit(_form_calibrate_job, (light, forms, a)) for forms, a in args]
-            cals = []
-            for f in futures:
-                try:
-                    cals.append(f.result())
-                except KilnctlError:
-                    cals.append(None)
-        else:
-            cals = [self._calibrate_in(forms, a) for forms, a in args]
+        cals = self._run_calibrations([a for _, a in args], pool, [forms for forms, _ in args])
         wall = (time.perf_counter() - t_start) / len(jobs)
         best: dict = {}
         for (i, form), cal in zip(jobs, cals):
@@ -619,6 +608,7 @@ class Diagnosis:
             if cal is None:
                 say(f"  {r.effect} as {form.name}: could not be fitted")
                 continue
+            cal.form_ = form.name  # every judgement of this refit (a re-anchored round's too) names its form
             ev = self._evidence(m, r.effect, cal, r.calibration, scales, train, test, exp, wall)
             pinned = [fp.name for fp in form.parameters if fp.name in cal.on_bound_]
             if pinned and ev.supported:
@@ -639,18 +629,17 @@ class Diagnosis:
         results = list(results)
         for i, (name, cal, entry) in best.items():
             entry[3] = True
-            r = self._evidence(m, results[i].effect, cal, current, scales, train, test, exp,
-                               results[i].wall_s + wall)
-            results[i] = dataclasses.replace(r, form=name)
+            results[i] = r = self._evidence(m, results[i].effect, cal, current, scales, train, test, exp,
+                                            results[i].wall_s + wall)
             say(f"  {r.effect:<22} in its {name} form: dBIC {r.delta_bic:+10.1f} (whitened "
                 f"{r.delta_bic_corrected:+8.1f})  {'supported' if r.supported else '-'}")
         return results
 
     def _calibrate_in(self, forms, args):
-        """:meth:`_calibrate` on ``args`` with the effects in ``forms`` ({effect: form name}); None if it
-        fails."""
+        """:meth:`_calibrate` on ``args`` with the effects in ``forms`` ({effect: form name}; None: the
+        diagnosis' own); None if it fails."""
         saved = self._forms
-        self._forms = forms
+        self._forms = saved if forms is None else forms
         try:
             return self._calibrate(*args)
         except KilnctlError:
@@ -904,22 +893,18 @@ class Diagnosis:
         light.__dict__ = {k: v for k, v in self.__dict__.items() if not k.endswith("_")}
         return light
 
-    def _run_calibrations(self, args, pool) -> list:
-        """:meth:`_calibrate` on each argument tuple (in the pool when given); None for one that failed."""
-        if pool is not None:
-            light = self._settings()
-            futures = [pool.submit(_calibrate_job, (light, a)) for a in args]
-            outs = []
-            for f in futures:
-                try:
-                    outs.append(f.result())
-                except KilnctlError:
-                    outs.append(None)
-            return outs
+    def _run_calibrations(self, args, pool, forms=None) -> list:
+        """:meth:`_calibrate` on each argument tuple (in the pool when given); None for one that failed.
+        ``forms``: for each tuple, the effects' forms to fit it with (see :meth:`_calibrate_in`)."""
+        forms = [None] * len(args) if forms is None else forms
+        if pool is None:
+            return [self._calibrate_in(f, a) for a, f in zip(args, forms)]
+        light = self._settings()
+        futures = [pool.submit(_calibrate_job, (light, f, a)) for a, f in zip(args, forms)]
         outs = []
-        for a in args:
+        for f in futures:
             try:
-                outs.append(self._calibrate(*a))
+                outs.append(f.result())
             except KilnctlError:
                 outs.append(None)
         return outs
@@ -1126,9 +1111,11 @@ class Diagnosis:
         """Judge a refitted candidate against the current model (:func:`~kilnctl.measure.evidence.judge`) with
         this diagnosis' thresholds; the hunting rule applies when the current model's cycle runs in step with
         the record's."""
-        return judge(m, name, cal, current, scales, train, test, exp, wall_s, min_delta_bic=self.min_delta_bic,
-                     min_holdout_gain=self.min_holdout_gain, min_holdout_z=self.holdout_z,
-                     hunting=self._cycle_in_phase(m, current, exp))
+        r = judge(m, name, cal, current, scales, train, test, exp, wall_s, min_delta_bic=self.min_delta_bic,
+                  min_holdout_gain=self.min_holdout_gain, min_holdout_z=self.holdout_z,
+                  hunting=self._cycle_in_phase(m, current, exp))
+        r.form = getattr(cal, "form_", None)  # a refit in another form of the effect (see _in_best_form)
+        return r
 
     def _outside(self, m, params, selected, current, results, scales, train, test, exp, say):
         """Test the hypotheses of a change outside the catalogue against the round's best candidate.
@@ -1421,15 +1408,6 @@ def _pool(workers: int):
 
 
 def _calibrate_job(job):
-    """Worker side of Diagnosis._calibrate, without the raw simulation."""
-    diag, args = job
-    cal = diag._calibrate(*args)
-    cal._problem = None
-    cal.run_.response = None
-    return cal
-
-
-def _form_calibrate_job(job):
     """Worker side of Diagnosis._calibrate_in, without the raw simulation (None when the fit fails)."""
     diag, forms, args = job
     cal = diag._calibrate_in(forms, args)

@@ -378,6 +378,12 @@ def _as_form(r, effect, form):
     return dataclasses.replace(r, effect=f"{effect} ({form} form)", form=None)
 
 
+def _label(r) -> str:
+    """A candidate's name, with the other form its result is in (``speed_sensor_lag (delay form)``)."""
+    form = getattr(r, "form", None)
+    return r.effect + (f" ({form} form)" if form else "")
+
+
 def _fitted_effect_params(d):
     """``(effect, parameter)`` of every selected effect's parameter the final calibration fitted (its form's
     too)."""
@@ -444,8 +450,7 @@ def greedy_order(d) -> list[str]:
 
 def _added_in(rounds) -> list[str]:
     """The first candidate of each of ``rounds`` that added one (it is supported)."""
-    return [rnd[0].effect + (f" ({rnd[0].form} form)" if rnd[0].form else "") for rnd in rounds
-            if rnd and rnd[0].supported]
+    return [_label(rnd[0]) for rnd in rounds if rnd and rnd[0].supported]
 
 
 def round_model(d, i: int, base: str = "the base") -> str:
@@ -653,8 +658,7 @@ def _summary_rows(r, verdict: str, why: str) -> list[str]:
     """A candidate's row of the summary's table, then why, wrapped."""
     gain = f"{_signed(r.holdout_gain)} %" if math.isfinite(r.holdout_gain) else "-"
     fi = _fit_text(r.fit_percent.get("current_A", math.nan))
-    label = r.effect + (f" ({r.form} form)" if r.form else "")
-    return ([f"    {label:<22} {_bic_text(r.delta_bic):>9} {_bic_text(r.delta_bic_corrected):>14} {gain:>9} "
+    return ([f"    {_label(r):<22} {_bic_text(r.delta_bic):>9} {_bic_text(r.delta_bic_corrected):>14} {gain:>9} "
              f"{fi:>6}  {verdict}"] + _wrap(f"why: {why}", " " * 8, 5))
 
 
@@ -1105,11 +1109,10 @@ def _candidate_row(r, verdict: str, why: str, names=None) -> tuple:
     """A candidate's row of the report's tables (header: see :func:`diagnosis_html`); ``names``: the parameters
     shown (default: the effect's)."""
     if names is None:
-        names = _effect_params(r.effect) + (_form_params_of(r.effect, r.form) if r.form else ())
+        names = _effect_params(r.effect) + _form_params_of(r.effect, getattr(r, "form", None))
     pars = "; ".join(f"{k} = {_value_words(v['value'], v['stderr'], k in r.not_identifiable, v['unit'])}"
                      for k, v in r.parameters.items() if k in names)
-    label = r.effect + (f" ({r.form} form)" if r.form else "")
-    return (label, _bic_text(r.delta_bic), _bic_text(r.delta_bic_corrected), _signed(r.holdout_gain),
+    return (_label(r), _bic_text(r.delta_bic), _bic_text(r.delta_bic_corrected), _signed(r.holdout_gain),
             _fit_text(r.fit_percent.get("current_A", math.nan)), pars or "-",
             f"{verdict}: {why}" + (". On bound: " + ", ".join(r.on_bound)) * bool(r.on_bound))
 
