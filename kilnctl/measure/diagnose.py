@@ -85,6 +85,9 @@ INERTIA_STEPS, INERTIA_SPAN = 11, 0.1
 SETUP_FAR = 0.1
 #: that search screens this many times as many starting points as it fits (see Calibration.fit, ``screen``)
 SCREEN = 2
+#: a form's added parameter this close to a bound, as a fraction of its range (of its logarithm for 'log'
+#: parameters) [-], ends at the bound: the form is not used (see Diagnosis._in_best_form)
+FORM_BOUND = 0.05
 
 
 class Diagnosis:
@@ -580,9 +583,10 @@ class Diagnosis:
         well as the candidate at worst, and from the form's own starts (:attr:`Form.starts`, from those
         values).  A form is supported when :func:`~kilnctl.measure.evidence.judge` supports it against the
         candidate in its own form (the tests every candidate passes, the form's added parameters counted) and
-        none of its added parameters ends on a bound: on the benchmark plant's backlash records, where the
-        lag stands in for the dead zone's impacts, the second-order form ended at zeta_s 0.1 (its bound) with
-        tau_s 0.6 ms, a 50 Hz ring no speed filter has.  Of the supported
+        none of its added parameters ends at a bound (within :data:`FORM_BOUND` of its range): on the
+        benchmark plant's backlash records, where the lag stands in for the dead zone's impacts, the
+        second-order form ended at zeta_s 0.10-0.11 (its bound 0.1) with tau_s 0.6 ms, a 50 Hz ring no speed
+        filter has, and a third stand-in followed.  Of the supported
         forms the one of lowest BIC replaces the candidate's result, judged again against ``current``, with
         :attr:`CandidateResult.form` set: the round then ranks the effect by its best form (a lag ranked below
         a compliance on a record of a 25 ms delay, whose ringing the compliance imitated).  Every form tried
@@ -610,13 +614,13 @@ class Diagnosis:
                 continue
             cal.form_ = form.name  # every judgement of this refit (a re-anchored round's too) names its form
             ev = self._evidence(m, r.effect, cal, r.calibration, scales, train, test, exp, wall)
-            pinned = [fp.name for fp in form.parameters if fp.name in cal.on_bound_]
+            pinned = [fp.name for fp in form.parameters if _near_bound(fp, cal.values_[fp.name])]
             if pinned and ev.supported:
                 # the form's optimum lies beyond its physical range (a filter damped at 0.1 that rings at 50 Hz
                 # with a backlash's impacts): it stands in for something else
                 ev.supported = False
                 ev.stand_in = True
-                ev.reason = (f"not this form: its {', '.join(pinned)} ended on a bound "
+                ev.reason = (f"not this form: its {', '.join(pinned)} ended at a bound "
                              f"({', '.join(f'{k} = {cal.values_[k]:.3g}' for k in pinned)}), so it stands in for "
                              f"another difference ({ev.reason})")
             entry = [r.effect, form.name, ev, False, tuple(selected)]
@@ -1451,6 +1455,16 @@ def _falls(m, exp):
     stick-slip breakaways)."""
     active = m.t >= exp.t0 - 1e-9
     return breakaways(m.t[active], m.current[active], t_from=exp.steady_from)
+
+
+def _near_bound(fp, value: float) -> bool:
+    """True when ``value`` of the free parameter ``fp`` lies within :data:`FORM_BOUND` of its range from a bound
+    (of the range of its logarithm when ``fp.kind`` is 'log')."""
+    if fp.kind == "log":
+        lo, hi, v = math.log(fp.lower), math.log(fp.upper), math.log(max(value, fp.lower))
+    else:
+        lo, hi, v = fp.lower, fp.upper, value
+    return min(v - lo, hi - v) < FORM_BOUND * (hi - lo)
 
 
 def _far(values: dict, setup: dict) -> bool:
