@@ -585,12 +585,13 @@ class Diagnosis:
         candidate in its own form (the tests every candidate passes, the form's added parameters counted) and
         none of its added parameters ends at a bound (within :data:`FORM_BOUND` of its range): on the
         benchmark plant's backlash records, where the lag stands in for the dead zone's impacts, the
-        second-order form ended at zeta_s 0.10-0.11 (its bound 0.1) with tau_s 0.6 ms, a 50 Hz ring no speed
-        filter has, and a third stand-in followed.  Of the supported
-        forms the one of lowest BIC replaces the candidate's result, judged again against ``current``, with
-        :attr:`CandidateResult.form` set: the round then ranks the effect by its best form (a lag ranked below
-        a compliance on a record of a 25 ms delay, whose ringing the compliance imitated).  Every form tried
-        is listed in ``form_results_``.
+        second-order form ended at zeta_s 0.10-0.11 (then its bound) with tau_s 0.6 ms, a 50 Hz ring no speed
+        filter has, and a third stand-in followed.  Of the supported forms the one of lowest BIC replaces the
+        candidate's result, judged again against ``current`` (the refit carries its form's name, so every
+        later judgement of it names the form in :attr:`CandidateResult.form`): the round then ranks the
+        effect by its best form (on red team 4's record of a rigid second rotor and a 25 ms delay the lag in
+        its own form had dBIC -1130 against a compliance's -2215 that imitated the ringing, in its
+        second-order form -2047).  Every form tried is listed in ``form_results_``.
         """
         jobs = [(i, form) for i, r in enumerate(results) if r.supported and r.calibration is not None
                 and r.form is None for form in CATALOGUE[r.effect].forms]

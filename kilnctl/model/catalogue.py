@@ -56,15 +56,15 @@ class FreeParameter:
 
 @dataclass(frozen=True)
 class Form:
-    """Another form of an effect: other components with more parameters, tried once the effect is selected.
+    """Another form of an effect: other components with more parameters, tried when the effect is supported.
 
     A drive's speed feedback may pass a second-order filter or a transport
     delay rather than a first-order lag: the same effect (the controller
-    sees the speed late), another transfer function.  The diagnosis searches
-    with the effect's own form and, once the effect is selected, refits the
-    model with each form in its place; the best form is kept only on the
-    evidence every candidate must give (see
-    :meth:`kilnctl.measure.diagnose.Diagnosis.fit`).
+    sees the speed late), another transfer function.  The diagnosis refits
+    every candidate in its own form; a supported candidate is then refitted
+    in each of its forms, and judged in the best one that gives the evidence
+    every candidate must give (see
+    :meth:`kilnctl.measure.diagnose.Diagnosis._in_best_form`).
 
     Attributes
     ----------
@@ -161,8 +161,9 @@ class Effect:
         it stands in for a difference the catalogue may lack.  Physics, not a
         usual range: it holds for any magnitude.
     forms : tuple of Form
-        Other forms of the effect, each tried once the effect is selected
-        (a second-order speed filter for the first-order lag).
+        Other forms of the effect, each tried when the effect is a supported
+        candidate (a second-order speed filter or a delay for the
+        first-order lag).
     spread : str or None
         A parameter whose starting points are spread over its decades for
         the local fits (:class:`~kilnctl.measure.calibrate.Starts`): where it

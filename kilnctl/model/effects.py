@@ -48,7 +48,7 @@ class SpeedSensorLag(Component):
             notes="the record's speed_rpm is read as the sensor's reading, as a drive logs its speed feedback: "
                   "it lags the shaft like the controller's copy. "
                   "Large lags can destabilise the loop: such trial runs are cut short and count as a poor fit. "
-                  "Once selected, a second-order filter and a delay before the lag are tried in its place.",
+                  "When it is supported, a second-order filter and a delay before the lag are tried in its place.",
             forms=(Form("second_order",
                         "a second-order speed filter (tau_s s)^2/(4 zeta_s^2) + tau_s s + 1: a tuned filter that "
                         "rings when zeta_s < 0.7, near a pure delay of tau_s at 0.87, a first-order lag of tau_s "
