@@ -160,8 +160,8 @@ class Structure:
         forms = d.get("forms") or {}
         effects = []
         for e in d["selected"]:
-            known = {f.name: f for f in CATALOGUE[e].forms} if e in CATALOGUE else {}
-            effects += list(known[forms[e]].components) if forms.get(e) in known else [e]
+            form = CATALOGUE[e].form(forms.get(e)) if e in CATALOGUE else None
+            effects += list(form.components) if form is not None else [e]
         return cls(model or d.get("settings", {}).get("model") or "macro", tuple(effects))
 
     def __str__(self) -> str:

@@ -17,7 +17,7 @@ from ..errors import KilnctlError
 from .compare import level_caution
 from .effects import CATALOGUE
 from .evidence import close_rival
-from .report import unit_of as _unit
+from .report import listed, unit_of as _unit
 from .runner import CHANNELS, run_model
 
 __all__ = ["setup_cautions", "effect_cautions", "drift_texts", "rival_texts", "caution_texts", "DRIFT_CHECKED",
@@ -208,24 +208,18 @@ def rival_texts(d, r) -> list[str]:
                    + (f", and {c.effect} {_NOT_BETTER}" if (r.effect, c.effect) in tried else "")
                    + f": on this record the two change the current alike, and either may be the cause. {_DECIDES}")
     elif whitened:  # one caution for all of them: the same story told once
-        names = _listed([c.effect for c in whitened])
+        names = listed([c.effect for c in whitened])
         swapped = [c.effect for c in whitened if (r.effect, c.effect) in tried]
         out.append(f"{r.effect} was preferred by BIC (dBIC {r.delta_bic:+.1f}) to {names} (dBIC "
-                   f"{_listed([f'{c.delta_bic:+.1f}' for c in whitened])}), but with the noise's correlation "
+                   f"{listed([f'{c.delta_bic:+.1f}' for c in whitened])}), but with the noise's correlation "
                    f"modelled each of them is about as good or better (whitened dBIC {r.delta_bic_corrected:+.1f} "
-                   f"against {_listed([f'{c.delta_bic_corrected:+.1f}' for c in whitened])}; the threshold is "
+                   f"against {listed([f'{c.delta_bic_corrected:+.1f}' for c in whitened])}; the threshold is "
                    f"{d.min_delta_bic:g})"
                    + ((f", and each {_NOT_BETTER}" if len(swapped) == len(whitened)
-                       else f", and {_listed(swapped)} {_NOT_BETTER}") if swapped else "")
+                       else f", and {listed(swapped)} {_NOT_BETTER}") if swapped else "")
                    + f": on this record they change the current much as {r.effect} does, and any of them may be "
                    f"the cause. {_DECIDES}")
     return out
-
-
-def _listed(items) -> str:
-    """``a``, ``a and b``, ``a, b and c``."""
-    items = list(items)
-    return items[0] if len(items) == 1 else f"{', '.join(items[:-1])} and {items[-1]}"
 
 
 def caution_texts(effect: str, span_s: float, period_s: float | None, short_record_note: str,

@@ -31,7 +31,7 @@ __all__ = ["figure_tag", "table", "page", "write_report_files", "esc", "json_num
            "diagnosis_plain_headline", "uncertainty_words", "how_to_read", "settings_table", "parameter_table",
            "figure_block", "record_name_of", "HOW_TO_READ", "pretty_unit", "value_pair", "png_bytes", "write_page_files",
            "render_pngs", "report_page", "candidate_dict", "candidate_verdict", "greedy_order", "round_model",
-           "form_verdicts", "SUMMARY_WIDTH"]
+           "form_verdicts", "listed", "SUMMARY_WIDTH"]
 
 _CSS = """
 *{box-sizing:border-box}
@@ -364,8 +364,8 @@ def _effect_params(effect) -> tuple[str, ...]:
 
 def _form_params_of(effect, name) -> tuple[str, ...]:
     """The parameters the form ``name`` of an effect adds to the effect's own (none for another name)."""
-    forms = {f.name: f for f in CATALOGUE[effect].forms}
-    return tuple(fp.name for fp in forms[name].parameters) if name in forms else ()
+    form = CATALOGUE[effect].form(name) if effect in CATALOGUE else None
+    return tuple(fp.name for fp in form.parameters) if form is not None else ()
 
 
 def _form_params(d, effect) -> tuple[str, ...]:
@@ -373,15 +373,20 @@ def _form_params(d, effect) -> tuple[str, ...]:
     return _form_params_of(effect, (getattr(d, "forms_", None) or {}).get(effect))
 
 
-def _as_form(r, effect, form):
-    """A form's evidence under the name ``effect (form form)`` for the summary's and the report's rows."""
-    return dataclasses.replace(r, effect=f"{effect} ({form} form)", form=None)
+def listed(items) -> str:
+    """Words joined as a user reads a list: ``a``, ``a and b``, ``a, b and c``."""
+    items = list(items)
+    return items[0] if len(items) == 1 else f"{', '.join(items[:-1])} and {items[-1]}"
+
+
+def _named(effect: str, form: str | None) -> str:
+    """An effect's name with the other form it is in (``speed_sensor_lag (delay form)``), or alone."""
+    return f"{effect} ({form} form)" if form else effect
 
 
 def _label(r) -> str:
-    """A candidate's name, with the other form its result is in (``speed_sensor_lag (delay form)``)."""
-    form = getattr(r, "form", None)
-    return r.effect + (f" ({form} form)" if form else "")
+    """A candidate's name, with the other form its result is in (see :func:`_named`)."""
+    return _named(r.effect, getattr(r, "form", None))
 
 
 def _fitted_effect_params(d):
@@ -418,7 +423,7 @@ def _selected_names(d) -> list[str]:
     """The selected effects, each fitted in another form named with it (``speed_sensor_lag (second_order
     form)``)."""
     forms = getattr(d, "forms_", None) or {}
-    return [f"{e} ({forms[e]} form)" if e in forms else e for e in d.selected_]
+    return [_named(e, forms.get(e)) for e in d.selected_]
 
 
 def _params_dict(cal) -> dict:
@@ -695,7 +700,8 @@ def diagnosis_summary(d) -> str:
         lines += _wrap("other forms of a supported candidate, each against the candidate in its own form", "  ")
         lines.append(head)
         lines += [x for e, f, r, verdict, why, against in forms
-                  for x in _summary_rows(_as_form(r, e, f), verdict, f"as a candidate for {against}: {why}")]
+                  for x in _summary_rows(dataclasses.replace(r, form=f), verdict,
+                                         f"as a candidate for {against}: {why}")]
     removed = getattr(d, "removed_", None) or []
     if removed:
         lines += _wrap("effects added, then removed (by the backward or the swap check on the fitting part, or "
@@ -848,7 +854,7 @@ def diagnosis_plain_headline(d) -> str:
     forms = getattr(d, "forms_", None) or {}
     found = [_effect_words(e) + (f" in its {_effect_words(forms[e])} form" if e in forms else "")
              + (f" ({', '.join(v)})" if v else "") for e, v in vals.items()]
-    effects = found[0] if len(found) == 1 else ", ".join(found[:-1]) + " and " + found[-1]
+    effects = listed(found)
     s = (f"Missing from the model: {effects}. With {'it' if len(found) == 1 else 'them'} the current fit rose "
          f"from {c0:.1f} % to {c1:.1f} %.")
     if d.caveats_:
@@ -1105,11 +1111,10 @@ _DIAGNOSIS_SETTINGS = {
 }
 
 
-def _candidate_row(r, verdict: str, why: str, names=None) -> tuple:
-    """A candidate's row of the report's tables (header: see :func:`diagnosis_html`); ``names``: the parameters
-    shown (default: the effect's)."""
-    if names is None:
-        names = _effect_params(r.effect) + _form_params_of(r.effect, getattr(r, "form", None))
+def _candidate_row(r, verdict: str, why: str) -> tuple:
+    """A candidate's row of the report's tables (header: see :func:`diagnosis_html`): the effect's parameters,
+    and those of the other form its result is in."""
+    names = _effect_params(r.effect) + _form_params_of(r.effect, getattr(r, "form", None))
     pars = "; ".join(f"{k} = {_value_words(v['value'], v['stderr'], k in r.not_identifiable, v['unit'])}"
                      for k, v in r.parameters.items() if k in names)
     return (_label(r), _bic_text(r.delta_bic), _bic_text(r.delta_bic_corrected), _signed(r.holdout_gain),
@@ -1167,9 +1172,8 @@ def diagnosis_html(d, figs=None) -> str:
         parts.append("<h3>Other forms of a supported candidate</h3><p>A supported candidate with other forms "
                      "is refitted in each; a form counts on the same evidence as a candidate, judged against the "
                      "candidate in its own form, and the round judges the candidate in its best form.</p>")
-        parts.append(table(header, [_candidate_row(_as_form(r, e, f), verdict,
-                                                   f"as a candidate for {against}: {why}",
-                                                   _effect_params(e) + _form_params_of(e, f))
+        parts.append(table(header, [_candidate_row(dataclasses.replace(r, form=f), verdict,
+                                                   f"as a candidate for {against}: {why}")
                                     for e, f, r, verdict, why, against in forms], left=1,
                            selected={j for j, x in enumerate(forms) if x[3] == "judged in it"}, wrap=(5, 6)))
     removed = getattr(d, "removed_", None) or []

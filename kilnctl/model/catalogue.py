@@ -199,18 +199,10 @@ class Effect:
     spread: str | None = None
     forms: tuple = ()
 
-    def form(self, name: str) -> Form:
-        """The other form called ``name`` (:attr:`forms`).
-
-        Raises
-        ------
-        KeyError
-            The effect has no form of that name.
-        """
-        for f in self.forms:
-            if f.name == name:
-                return f
-        raise KeyError(f"effect {self.name!r} has no form {name!r} (forms: {[f.name for f in self.forms]})")
+    def form(self, name: str | None) -> Form | None:
+        """The other form called ``name`` (:attr:`forms`), or None when the effect has none of that name (or
+        ``name`` is None: the effect's own form)."""
+        return next((f for f in self.forms if f.name == name), None)
 
     def applicable(self, params: Parameters, model: str) -> str | None:
         """Return None if the effect can be added to this base, else the reason it cannot.

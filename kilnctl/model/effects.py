@@ -17,6 +17,14 @@ from .base import Component, register
 from .catalogue import Effect, Form, FreeParameter
 
 
+def _sensed(e, rate):
+    """The speed sensor's reading (state ``omega_meas`` [rad/s]) as the controller's feedback and the logged
+    speed, with its rate [rad/s^2] (the PID's derivative term): the same for every form of the sensor."""
+    e.sig["omega_fb"] = e.x["omega_meas"]
+    e.sig["omega_log"] = e.x["omega_meas"]
+    e.sig["omega_fb_dot"] = rate
+
+
 @register
 class SpeedSensorLag(Component):
     """First-order lag of the speed sensor: the controller and the record see its reading.
@@ -77,9 +85,7 @@ class SpeedSensorLag(Component):
 
     def signals(self, e, mode):
         rate = (e.x["omega_motor"] - e.x["omega_meas"]) / e.p.tau_s
-        e.sig["omega_fb"] = e.x["omega_meas"]
-        e.sig["omega_log"] = e.x["omega_meas"]
-        e.sig["omega_fb_dot"] = rate
+        _sensed(e, rate)
 
     def finish(self, e, mode):
         e.set_rate("omega_meas", e.sig["omega_fb_dot"])
@@ -113,9 +119,7 @@ class SpeedSensorFilter(Component):
         spec.add_state("omega_meas_dot", "rad/s^2", 10.0, "rate of the measured motor speed")
 
     def signals(self, e, mode):
-        e.sig["omega_fb"] = e.x["omega_meas"]
-        e.sig["omega_log"] = e.x["omega_meas"]
-        e.sig["omega_fb_dot"] = e.x["omega_meas_dot"]
+        _sensed(e, e.x["omega_meas_dot"])
 
     def finish(self, e, mode):
         p = e.p
@@ -152,9 +156,7 @@ class SpeedSensorDelay(Component):
 
     def signals(self, e, mode):
         delayed = e.x["omega_motor"] - e.p.T_d * e.x["delay_x2"]
-        e.sig["omega_fb"] = e.x["omega_meas"]
-        e.sig["omega_log"] = e.x["omega_meas"]
-        e.sig["omega_fb_dot"] = (delayed - e.x["omega_meas"]) / e.p.tau_s
+        _sensed(e, (delayed - e.x["omega_meas"]) / e.p.tau_s)
 
     def finish(self, e, mode):
         T = e.p.T_d
