@@ -844,8 +844,83 @@ def test_several_rivals_by_the_whitened_bic_share_one_caution():
                           "motor_coulomb_friction and speed_sensor_lag (dBIC -246.4, -188.9 and -25.2), but with "
                           "the noise's correlation modelled each of them is about as good or better (whitened dBIC "
                           "-47.1 against -202.4, -124.4 and -282.2; the threshold is 10), and second_motor and "
-                          "speed_sensor_lag in its place did not fit better by every test: ")
+                          "speed_sensor_lag, each in its place, did not fit better by every test: ")
     assert "any of them may be the cause" in one
+    # the two of lowest dBIC refitted together too, then all three alone, then the pair only
+    d.swap_tried_.add(("kiln_unbalance", ("second_motor", "motor_coulomb_friction")))
+    (one,) = [t for t in effect_cautions(d, m, _exp(), SETUP) if "was preferred" in t]
+    assert ("and second_motor and speed_sensor_lag, each in its place, did not fit better by every test, nor "
+            "second_motor and motor_coulomb_friction together: ") in one
+    d.swap_tried_.add(("kiln_unbalance", "motor_coulomb_friction"))
+    (one,) = [t for t in effect_cautions(d, m, _exp(), SETUP) if "was preferred" in t]
+    assert ("and each in its place did not fit better by every test, nor second_motor and "
+            "motor_coulomb_friction together: ") in one
+    d.swap_tried_ = {("kiln_unbalance", ("second_motor", "motor_coulomb_friction"))}
+    (one,) = [t for t in effect_cautions(d, m, _exp(), SETUP) if "was preferred" in t]
+    assert "and second_motor and motor_coulomb_friction together in its place did not fit better by every" in one
+
+
+@pytest.mark.parametrize("pair_better, chosen", [(True, ("speed_sensor_lag", "second_motor")), (False, None)])
+def test_swap_check_refits_the_two_closest_rivals_together_in_the_winners_place(pair_better, chosen):
+    # truth: the round of red team 4's f26 (a rigid second rotor and a 25 ms speed-sensor delay): a compliance
+    # won (dBIC -2215.2, whitened -1175.6) against the lag in its second-order form (-2047.0, -2237.1) and the
+    # second motor (-1527.9, -2534.2); a motor friction (-165.9) was no close rival.  The refits and verdicts
+    # are hand-made (only the logic is tested): each rival alone, and the two together, in the compliance's
+    # place, each rival in the form its round judged it in; the pair is kept only when better by every test
+    from types import SimpleNamespace
+
+    from kilnctl.measure.diagnose import CandidateResult
+
+    d = Diagnosis(SETUP)
+    d._forms = {}
+    current = SimpleNamespace(values_={"mu_c": 0.39, "k_po": 9e9, "C_po": 3e7, "T_unb": 2e5, "phi_unb": 0.6})
+    seen = []
+
+    def run_calibrations(args, pool, forms):
+        seen.extend((a[2], f, a[5]) for a, f in zip(args, forms))
+        return [SimpleNamespace(values_=dict(a[5]), effects=a[2]) for a in args]
+
+    def evidence(m, name, cal, against, *a):
+        better = "+" in name and pair_better
+        return CandidateResult(name, -50.0 if better else 30.0, 3.0 if better else -1.0, {}, {}, {}, [], [],
+                               better, "", 0.0, delta_bic_corrected=-40.0 if better else 20.0, calibration=cal)
+
+    def result(name, dbic, whitened, values, form=None):
+        cal = SimpleNamespace(values_=dict(values, mu_c=0.4))
+        return CandidateResult(name, dbic, 10.0, {}, {}, {}, [], [], True, "", 1.0, delta_bic_corrected=whitened,
+                               calibration=cal, form=form)
+
+    won = result("drivetrain_compliance", -2215.2, -1175.6, {"k_po": 9e9, "C_po": 3e7})
+    lag = result("speed_sensor_lag", -2047.0, -2237.1, {"tau_s": 0.02, "zeta_s": 0.6}, form="second_order")
+    j2 = result("second_motor", -1527.9, -2534.2, {"J_m2": 21.0})
+    fr = result("motor_coulomb_friction", -165.9, -150.0, {"T_cm": 100.0})
+    unb = result("kiln_unbalance", -516.4, -400.0, {"T_unb": 2e5, "phi_unb": 0.6})
+    d._run_calibrations = run_calibrations
+    d._evidence = evidence
+    d._first_failure = lambda *a: None
+    added = {"drivetrain_compliance": won, "kiln_unbalance": unb}
+    sel, cal, removed, swaps = d._swap(None, SETUP, ["drivetrain_compliance", "kiln_unbalance"], current, added,
+                                       [[won, lag, j2, fr], [unb]], None, None, None, None, None, lambda s: None)
+    structs = [s for s, _, _ in seen]
+    assert structs == [("speed_sensor_lag", "kiln_unbalance"), ("second_motor", "kiln_unbalance"),
+                       ("speed_sensor_lag", "second_motor", "kiln_unbalance")]
+    # the lag in its round's form, with that form's parameter; the compliance's parameters left out
+    assert [f.get("speed_sensor_lag") for _, f, _ in seen] == ["second_order", None, "second_order"]
+    pair_init = seen[2][2]
+    assert pair_init["zeta_s"] == 0.6 and pair_init["J_m2"] == 21.0 and pair_init["T_unb"] == 2e5
+    assert "k_po" not in pair_init
+    assert d.swap_tried_ == {("drivetrain_compliance", "speed_sensor_lag"), ("drivetrain_compliance", "second_motor"),
+                             ("drivetrain_compliance", ("speed_sensor_lag", "second_motor"))}
+    if chosen is None:
+        assert sel == ["drivetrain_compliance", "kiln_unbalance"] and removed == [] and swaps == {}
+        return
+    assert sel == ["speed_sensor_lag", "second_motor", "kiln_unbalance"]
+    assert swaps == {"speed_sensor_lag": "drivetrain_compliance", "second_motor": "drivetrain_compliance"}
+    assert d._forms == {"speed_sensor_lag": "second_order"}
+    (gone,) = removed
+    assert gone.effect == "drivetrain_compliance" and not gone.supported
+    assert gone.reason.startswith("replaced by speed_sensor_lag and second_motor in the swap check")
+    assert "with speed_sensor_lag and second_motor together in its place" in gone.reason
 
 
 def test_final_check_removes_a_compliance_whose_final_values_cannot_ring():

@@ -153,8 +153,28 @@ def drift_texts(d, params) -> list[str]:
 
 #: how every rival caution ends: what would tell the effects apart
 _DECIDES = "A record where they act differently (another ramp rate or set speed) decides."
-#: what the rival caution adds for a rival the swap check refitted in the winner's place
-_NOT_BETTER = "in its place did not fit better by every test"
+#: what the rival caution says of rivals the swap check refitted in the winner's place
+_NOT_BETTER = "did not fit better by every test"
+
+
+def _swap_words(winner: str, rivals: list, tried: set) -> str:
+    """The rival caution's clause on the swap check: which of ``rivals`` it refitted in the place of
+    ``winner`` (``tried``: pairs (winner, rival), two rivals refitted together as a tuple of their names),
+    each alone and two together, that did not fit better; empty when it refitted none."""
+    alone = [c for c in rivals if (winner, c) in tried]
+    together = [" and ".join(x) + " together" for w, x in sorted(tried, key=str)
+                if w == winner and isinstance(x, tuple) and set(x) <= set(rivals)]
+    if len(alone) == len(rivals) and len(rivals) > 1:
+        who = "each in its place"
+    elif len(alone) > 1:
+        who = f"{listed(alone)}, each in its place,"
+    elif alone:
+        who = f"{alone[0]} in its place"
+    elif together:
+        return f", and {listed(together)} in its place {_NOT_BETTER}"
+    else:
+        return ""
+    return f", and {who} {_NOT_BETTER}" + (f", nor {listed(together)}" if together else "")
 
 
 def rival_texts(d, r) -> list[str]:
@@ -205,18 +225,16 @@ def rival_texts(d, r) -> list[str]:
                    f"{c.delta_bic:+.1f}), but with the noise's correlation modelled {by} (whitened dBIC "
                    f"{r.delta_bic_corrected:+.1f} against {c.delta_bic_corrected:+.1f}; the threshold is "
                    f"{d.min_delta_bic:g})"
-                   + (f", and {c.effect} {_NOT_BETTER}" if (r.effect, c.effect) in tried else "")
+                   + _swap_words(r.effect, [c.effect], tried)
                    + f": on this record the two change the current alike, and either may be the cause. {_DECIDES}")
     elif whitened:  # one caution for all of them: the same story told once
         names = listed([c.effect for c in whitened])
-        swapped = [c.effect for c in whitened if (r.effect, c.effect) in tried]
         out.append(f"{r.effect} was preferred by BIC (dBIC {r.delta_bic:+.1f}) to {names} (dBIC "
                    f"{listed([f'{c.delta_bic:+.1f}' for c in whitened])}), but with the noise's correlation "
                    f"modelled each of them is about as good or better (whitened dBIC {r.delta_bic_corrected:+.1f} "
                    f"against {listed([f'{c.delta_bic_corrected:+.1f}' for c in whitened])}; the threshold is "
                    f"{d.min_delta_bic:g})"
-                   + ((f", and each {_NOT_BETTER}" if len(swapped) == len(whitened)
-                       else f", and {listed(swapped)} {_NOT_BETTER}") if swapped else "")
+                   + _swap_words(r.effect, [c.effect for c in whitened], tried)
                    + f": on this record they change the current much as {r.effect} does, and any of them may be "
                    f"the cause. {_DECIDES}")
     return out

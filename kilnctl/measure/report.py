@@ -31,7 +31,7 @@ __all__ = ["figure_tag", "table", "page", "write_report_files", "esc", "json_num
            "diagnosis_plain_headline", "uncertainty_words", "how_to_read", "settings_table", "parameter_table",
            "figure_block", "record_name_of", "HOW_TO_READ", "pretty_unit", "value_pair", "png_bytes", "write_page_files",
            "render_pngs", "report_page", "candidate_dict", "candidate_verdict", "greedy_order", "round_model",
-           "form_verdicts", "listed", "SUMMARY_WIDTH"]
+           "form_verdicts", "listed", "label", "SUMMARY_WIDTH"]
 
 _CSS = """
 *{box-sizing:border-box}
@@ -384,8 +384,19 @@ def _named(effect: str, form: str | None) -> str:
     return f"{effect} ({form} form)" if form else effect
 
 
-def _label(r) -> str:
-    """A candidate's name, with the other form its result is in (see :func:`_named`)."""
+def label(r) -> str:
+    """A candidate's name, with the other form its result is in.
+
+    Parameters
+    ----------
+    r : CandidateResult
+        A candidate's result (its ``form`` None for the effect's own form).
+
+    Returns
+    -------
+    str
+        ``speed_sensor_lag (delay form)``, or the effect's name alone.
+    """
     return _named(r.effect, getattr(r, "form", None))
 
 
@@ -455,7 +466,7 @@ def greedy_order(d) -> list[str]:
 
 def _added_in(rounds) -> list[str]:
     """The first candidate of each of ``rounds`` that added one (it is supported)."""
-    return [_label(rnd[0]) for rnd in rounds if rnd and rnd[0].supported]
+    return [label(rnd[0]) for rnd in rounds if rnd and rnd[0].supported]
 
 
 def round_model(d, i: int, base: str = "the base") -> str:
@@ -508,8 +519,11 @@ def candidate_verdict(d, i: int, r) -> tuple[str, str]:
         return "added", r.reason
     swaps = getattr(d, "swaps_", None) or {}
     if r.supported and r.effect in swaps and r.effect in d.selected_ and swaps[r.effect] == added:
+        partners = [k for k, v in swaps.items() if v == added and k != r.effect]
         return "added by the swap check", (f"{r.reason}; {added} had the lower dBIC and was added first, then "
-                                           f"replaced by {r.effect} in the swap check")
+                                           f"replaced by {r.effect}"
+                                           + (f" together with {listed(partners)}" if partners else "")
+                                           + " in the swap check")
     if r.supported and added is not None:
         then = (f"tried again against it in round {i + 2}" if i + 1 < len(d.rounds_) else
                 f"at most {d.max_effects} effects are added")
@@ -663,7 +677,7 @@ def _summary_rows(r, verdict: str, why: str) -> list[str]:
     """A candidate's row of the summary's table, then why, wrapped."""
     gain = f"{_signed(r.holdout_gain)} %" if math.isfinite(r.holdout_gain) else "-"
     fi = _fit_text(r.fit_percent.get("current_A", math.nan))
-    return ([f"    {_label(r):<22} {_bic_text(r.delta_bic):>9} {_bic_text(r.delta_bic_corrected):>14} {gain:>9} "
+    return ([f"    {label(r):<22} {_bic_text(r.delta_bic):>9} {_bic_text(r.delta_bic_corrected):>14} {gain:>9} "
              f"{fi:>6}  {verdict}"] + _wrap(f"why: {why}", " " * 8, 5))
 
 
@@ -1117,7 +1131,7 @@ def _candidate_row(r, verdict: str, why: str) -> tuple:
     names = _effect_params(r.effect) + _form_params_of(r.effect, getattr(r, "form", None))
     pars = "; ".join(f"{k} = {_value_words(v['value'], v['stderr'], k in r.not_identifiable, v['unit'])}"
                      for k, v in r.parameters.items() if k in names)
-    return (_label(r), _bic_text(r.delta_bic), _bic_text(r.delta_bic_corrected), _signed(r.holdout_gain),
+    return (label(r), _bic_text(r.delta_bic), _bic_text(r.delta_bic_corrected), _signed(r.holdout_gain),
             _fit_text(r.fit_percent.get("current_A", math.nan)), pars or "-",
             f"{verdict}: {why}" + (". On bound: " + ", ".join(r.on_bound)) * bool(r.on_bound))
 
