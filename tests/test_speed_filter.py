@@ -169,3 +169,41 @@ def test_a_supported_candidate_is_judged_in_its_supported_form_of_lowest_bic(sup
         delay = d.form_results_[1][2]
         assert not delay.supported and delay.stand_in and "T_d ended at a bound (T_d = 0.0012)" in delay.reason
     assert all(x[4] == ("current_limit",) for x in d.form_results_)
+
+
+@pytest.mark.parametrize("zeta_s, back", [(0.305, True), (0.7, False)])
+def test_a_form_at_its_bound_at_the_final_fit_goes_back_to_the_effects_own_form(zeta_s, back):
+    # truth: zeta_s's range 0.3-10 (log) worked out by hand: 0.305 lies ln(0.305/0.3) = 0.017 from the bound,
+    # under 5 % of ln(10/0.3) = 3.5 (0.175); 0.7 lies 0.85 from it.  The refit is a stand-in: only the logic
+    # is tested: the effect refitted in its own form from the final values, and a caution saying so
+    import math
+    from types import SimpleNamespace
+
+    from kilnctl.measure.diagnose import FORM_BOUND, Diagnosis
+
+    fp = CATALOGUE["speed_sensor_lag"].form("second_order").parameters[0]
+    assert (fp.lower, fp.upper, fp.kind) == (0.3, 10.0, "log")
+    assert (math.log(zeta_s / 0.3) < FORM_BOUND * math.log(10 / 0.3)) == back
+    d = Diagnosis(Parameters())
+    d._forms = {"speed_sensor_lag": "second_order"}
+    final = SimpleNamespace(values_={"mu_c": 0.4, "tau_s": 0.02, "zeta_s": zeta_s}, fit_percent_={"current_A": 97.0})
+    seen = []
+
+    def calibrate(m, params, effects, scales, mask, init, *a):
+        seen.append((effects, dict(d._forms), init))
+        return SimpleNamespace(values_=dict(init), fit_percent_={"current_A": 96.5})
+
+    d._calibrate = calibrate
+    out, notes = d._final_forms(None, Parameters(), ("speed_sensor_lag",), final, None, lambda s: None)
+    if not back:
+        assert out is final and notes == [] and seen == []
+        assert d._forms == {"speed_sensor_lag": "second_order"}
+        return
+    ((effects, forms, init),) = seen
+    assert effects == ("speed_sensor_lag",) and forms == {} and d._forms == {}
+    assert "zeta_s" not in init and init["tau_s"] == 0.02
+    assert out.fit_percent_["current_A"] == 96.5
+    (note,) = notes
+    assert note.startswith("speed_sensor_lag was selected in its second_order form, but at the final fit its "
+                           "zeta_s = 0.305 ended at a bound")
+    assert "(current fit 97.0 % in the form, 96.5 % in its own)" in note

@@ -542,6 +542,7 @@ class Diagnosis:
         else:
             final = base
         self.final_search_ = _search_summary(final)
+        final, form_notes = self._final_forms(m, params, tuple(selected), final, exp, say)
         selected, final, dropped = self._final_check(m, params, selected, final, scales, train, test, exp, say)
         self.swaps_ = {k: v for k, v in self.swaps_.items() if k in selected}
         self.forms_ = {e: f for e, f in self._forms.items() if e in selected}
@@ -567,7 +568,7 @@ class Diagnosis:
             self.unexplained_ = dict(self.signature_, structured=True, hint=change["text"],
                                      outside_change={k: v for k, v in change.items() if k != "text"},
                                      text=f"{change['text']}. The model's {self.signature_['described']}.")
-        self.caveats_ = list(self.setup_cautions_) + effect_cautions(self, m, exp, params)
+        self.caveats_ = list(self.setup_cautions_) + effect_cautions(self, m, exp, params) + form_notes
         self.standstill_ = standstill_offsets(m, exp)
         if self.standstill_:
             text = "; ".join(o["text"] for o in self.standstill_)
@@ -866,6 +867,45 @@ class Diagnosis:
             own += [{k: v for k, v in vals.items() if k in names} for vals in (latest[c.effect],
                                                                                c.calibration.values_)]
         return forms, (m, params, struct, scales, train, first, own, exp, ff)
+
+    def _final_forms(self, m, params, selected, final, exp, say):
+        """A selected effect whose form's added parameter ends at a bound at the final values goes back to its
+        own form.
+
+        The rounds refuse a form whose added parameter ends within :data:`FORM_BOUND` of a bound (see
+        :meth:`_in_best_form`); the final fit, from other starts on the whole record, can drift there after the
+        round (the benchmark plant's backlash records, before zeta_s was bounded below at 0.3: the
+        second-order form ended at zeta_s 0.103 at the final fit).  Such an effect is refitted in its own form
+        from the final values (one local fit on the whole record); the final check then judges it as any other.
+
+        Returns
+        -------
+        (Calibration, list of str)
+            The final calibration, and a caution for each effect taken back to its own form.
+        """
+        notes = []
+        for e in selected:
+            form = CATALOGUE[e].form(self._forms[e]) if e in self._forms else None
+            pinned = [fp.name for fp in (form.parameters if form else ()) if _near_bound(fp, final.values_[fp.name])]
+            if not pinned:
+                continue
+            forms = {k: v for k, v in self._forms.items() if k != e}
+            saved, self._forms = self._forms, forms
+            try:
+                names = self._free_names(params, selected)
+                init = {k: v for k, v in final.values_.items() if k in names}
+                own = self._calibrate(m, params, selected, "std", None, init, (), exp, None, None, 1, True)
+            except KilnctlError:  # kept in its form: the final check judges it there
+                self._forms = saved
+                continue
+            at = ", ".join(f"{k} = {final.values_[k]:.3g}" for k in pinned)
+            notes.append(f"{e} was selected in its {form.name} form, but at the final fit its {at} ended at a bound "
+                         f"of its range: there the form stands in for another difference, so {e} is fitted in its "
+                         f"own form (current fit {final.fit_percent_['current_A']:.1f} % in the form, "
+                         f"{own.fit_percent_['current_A']:.1f} % in its own)")
+            say(f"  {e}: its {form.name} form ended at a bound ({at}) at the final fit: refitted in its own form")
+            final = own
+        return final, notes
 
     def _final_check(self, m, params, selected, final, scales, train, test, exp, say):
         """Every effect of the final model must matter at its final values, on the whole record.
