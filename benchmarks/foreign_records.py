@@ -55,6 +55,22 @@ kilnctl's model nor ``benchmarks/baselines.py``.  Its own formulation:
   stiffness ``k`` [N m/rad] and damping ``c`` [N m s/rad]; two states: its speed
   and angle, and it carries no torque of its own: second_motor in another form
   when the coupling is stiff enough that the rotor follows).
+* Effect forms added by the fifth red team (each neutral when absent):
+  ``motor_viscous`` (a viscous drag ``b w_m`` [N m], b in N m s/rad, on the motor
+  shaft, e.g. the motor's fan and brushes, on top of Table 1's tiny B_m: the
+  catalogue's viscous_drag in another form, acting at the motor and referred
+  through the gear ratio, B_o = n^2 b on the kiln axis while the shaft is rigid),
+  ``runout`` (girth-gear runout: the mesh binds during the half revolution in
+  which the high spot is pressed into the pinion, a load ``T max(0, sin(th_k +
+  phi))`` [N m] against the drive, once per kiln revolution but half-wave
+  rectified: a kink where it sets in, a mean of T/pi and a first harmonic of
+  T/2: kiln_unbalance in another form), ``sgain`` (a speed sensor with a gain
+  error ``g``: fed back and logged speed ``g w_m``; the drive settles at
+  omega_ref / g; not in the catalogue) and, in the logged signals only,
+  ``ilag`` (a current sensor of first order, ``tau`` [s]: the logged current
+  is ``tau di_log/dt = i_a - i_log``, filtered exactly at the plant's steps
+  before the logger samples it; the control loop does not see it; not in the
+  catalogue).
 
 Records are written in layouts kilnctl has not seen (column names, units,
 rates, ISO timestamps, missing samples, uneven time base), each with the
@@ -107,6 +123,7 @@ class PlantSpec:
     seed: int = 0
     note: str = ""
     h: float = 5e-4                    # the plant's RK4 step [s] (1e-3 is enough where a test needs speed)
+    visibility: dict = field(default_factory=dict)  # how much the effects change the record (measured, written)
 
 
 def _reference(t, c):
@@ -160,6 +177,7 @@ def _rhs(x, t, c, mode):
         w_fb = y_f                  # filter2: second-order low-pass of the speed
     else:
         w_fb = w_s if c["tau_s"] > 0 else w_m
+    w_fb = c["g_s"] * w_fb          # sgain: speed sensor gain error (1 without it)
     e_f = e_v - K_FB * w_fb
     e_pi = c["k_p"] * e_f + c["k_I"] * z
     i_a = x_a + c["k_D"] / c["L_a"] * e_f
@@ -184,9 +202,11 @@ def _rhs(x, t, c, mode):
     T_load = c["load"] if t >= c["load_t"] else 0.0
     if c["c_q"] > 0:   # quad_drag: drag on the shell growing with the square of its speed
         T_load = T_load + c["c_q"] * w_k * abs(w_k)
+    if c["T_ro"] > 0:   # runout: the mesh binds during the half revolution the high spot is in the pinion
+        T_load = T_load + c["T_ro"] * max(0.0, math.sin(th_k + c["phi_ro"]))
     if c["T1_ov"] > 0 or c["T2_ov"] > 0:   # ovality: kiln-angle-periodic load, first and second harmonic
         T_load = T_load + (c["T1_ov"] * math.sin(th_k + c["phi1_ov"]) + c["T2_ov"] * math.sin(2 * th_k + c["phi2_ov"]))
-    T_motor = phi * c["k_i"] * i_a - c["B_m"] * w_m - c["T_cm"] * math.tanh(w_m / 0.05)
+    T_motor = phi * c["k_i"] * i_a - (c["B_m"] + c["b_mv"]) * w_m - c["T_cm"] * math.tanh(w_m / 0.05)
     a_2 = 0.0
     if c["J_c"] > 0:   # coupling_j2: a second rotor on the motor shaft through a soft coupling
         T_c = c["k_c"] * (th_m - th_2) + c["c_c"] * (w_m - w_2)
@@ -260,7 +280,9 @@ def plant_constants(spec: PlantSpec) -> dict:
              T1_ov=eff.get("ovality", {}).get("T1", 0.0), phi1_ov=eff.get("ovality", {}).get("phi1", 0.0),
              T2_ov=eff.get("ovality", {}).get("T2", 0.0), phi2_ov=eff.get("ovality", {}).get("phi2", 0.0),
              J_c=eff.get("coupling_j2", {}).get("J", 0.0), k_c=eff.get("coupling_j2", {}).get("k", 0.0),
-             c_c=eff.get("coupling_j2", {}).get("c", 0.0))
+             c_c=eff.get("coupling_j2", {}).get("c", 0.0),
+             b_mv=eff.get("motor_viscous", {}).get("b", 0.0), T_ro=eff.get("runout", {}).get("T", 0.0),
+             phi_ro=eff.get("runout", {}).get("phi", 0.0), g_s=eff.get("sgain", {}).get("g", 1.0))
 
 
 def simulate_plant(spec: PlantSpec, h: float = 5e-4):
@@ -288,7 +310,7 @@ def simulate_plant(spec: PlantSpec, h: float = 5e-4):
             raise ValueError(f"delay T_d = {c['T_d']} s is shorter than the step {h} s")
         c["h"] = h
         c["buf"] = np.zeros(int(math.ceil(c["T_d"] / h)) + 3)
-    sensed = c["tau_s"] > 0 or c["T_w"] > 0 or c["T_d"] > 0 or c["w_n"] > 0
+    sensed = c["tau_s"] > 0 or c["T_w"] > 0 or c["T_d"] > 0 or c["w_n"] > 0 or c["g_s"] != 1.0
     enc_every = max(1, int(round(c["T_w"] / h))) if c["T_w"] > 0 else 0
     enc_prev = 0
     mode = 0
@@ -365,7 +387,15 @@ def logged(spec: PlantSpec):
     if spec.layout in ("uneven", "iso_uneven"):
         t = t + rng.uniform(-0.3, 0.3, t.size) * dt    # logger jitter
         t = np.sort(t)
-    i = np.interp(t, sim["t"], sim["i_a"], left=0.0)
+    i_a = sim["i_a"]
+    if "ilag" in spec.effects:     # current sensor of first order: exact discrete filter at the plant's steps
+        a = math.exp(-(sim["t"][1] - sim["t"][0]) / spec.effects["ilag"]["tau"])
+        i_a = np.empty_like(sim["i_a"])
+        acc = sim["i_a"][0]
+        for k, v in enumerate(sim["i_a"]):
+            acc = a * acc + (1.0 - a) * v
+            i_a[k] = acc
+    i = np.interp(t, sim["t"], i_a, left=0.0)
     w = np.interp(t, sim["t"], sim["w_s"], left=0.0)
     ref = np.interp(t, sim["t"], sim["e_v"], left=0.0)
     if "isensor" in spec.effects:
@@ -466,11 +496,45 @@ def write_record(spec: PlantSpec, folder) -> dict:
     truth = dict(name=spec.name, effects=spec.effects, expected=list(spec.expected), base=spec.base,
                  fs=spec.fs, t_end=spec.t_end, layout=spec.layout, columns=lay["columns"], note=spec.note,
                  events=rec["events"], i_max=float(np.max(rec["i"])), n_samples=int(keep.sum()))
+    if spec.visibility:
+        truth["visibility"] = dict(definition=_VIS_DEF, **spec.visibility)
     (folder / f"{spec.name}.truth.json").write_text(json.dumps(truth, indent=1) + "\n")
     return dict(truth, csv=str(csv), toml=str(folder / f"{spec.name}.toml"))
 
 
 _NUIS = dict(m_v=580e3 * 1.04, mu_c=0.4 * 0.97, mu_s=0.51 * 1.03, J_v=1.678e6 * 0.95)
+_G1_BASE = dict(_NUIS, J_o=6.978e6 * 1.05, J_m=21.5 * 0.96, k_i=4.6 * 1.03, k_b=4.6 * 1.03, L=1.353 * 0.97,
+                R_a=0.00961 * 1.08, mu_brg=0.0012)
+# fifth red team: how much each record's effects change it, measured with this plant (written into the truth JSON)
+_VIS_DEF = ("logged record minus itself without the effect(s) (without_<name>: that one only; g1: with f1's base "
+            "values), the same noise draws: rms_A, mean_A (A) and rms_pct_std (% of the record's current std i_std_A) "
+            "of the current difference after the ramp (t > omega_ref/ramp_rate), ramp_rms_A during it, speed_rms_rpm "
+            "of the logged speed after it; noise_std_A: the logger's current noise (white and coloured)")
+_G_VIS = {
+    "g1": dict(i_std_A=172.1, noise_std_A=9.4,
+               with_f1_base_only=dict(ramp_rms_A=8.4, rms_A=82.7, rms_pct_std=48.1, mean_A=-33.5, speed_rms_rpm=0.44)),
+    "g2": dict(i_std_A=179.2, noise_std_A=7.8,
+               without_effects=dict(ramp_rms_A=38.5, rms_A=68.3, rms_pct_std=38.1, mean_A=68.3, speed_rms_rpm=0.01)),
+    "g3": dict(i_std_A=189.8, noise_std_A=7.8,
+               without_effects=dict(ramp_rms_A=0.0, rms_A=27.9, rms_pct_std=14.7, mean_A=18.0, speed_rms_rpm=0.0)),
+    "g4": dict(i_std_A=179.1, noise_std_A=7.8,
+               without_effects=dict(ramp_rms_A=3.1, rms_A=20.4, rms_pct_std=11.4, mean_A=-0.6, speed_rms_rpm=0.0)),
+    "g5": dict(i_std_A=181.1, noise_std_A=7.8,
+               without_effects=dict(ramp_rms_A=4.4, rms_A=90.0, rms_pct_std=49.7, mean_A=-6.9, speed_rms_rpm=0.46)),
+    "g6": dict(i_std_A=179.7, noise_std_A=7.8,
+               without_effects=dict(ramp_rms_A=122.8, rms_A=49.9, rms_pct_std=27.7, mean_A=45.9, speed_rms_rpm=0.27),
+               without_J2=dict(ramp_rms_A=99.8, rms_A=18.9, rms_pct_std=10.5, mean_A=0.3, speed_rms_rpm=0.26),
+               without_motor_viscous=dict(ramp_rms_A=25.7, rms_A=45.5, rms_pct_std=25.3, mean_A=45.5,
+                                          speed_rms_rpm=0.01)),
+    "g7": dict(i_std_A=207.5, noise_std_A=7.8,
+               without_effects=dict(ramp_rms_A=42.8, rms_A=94.1, rms_pct_std=45.3, mean_A=7.8, speed_rms_rpm=0.43),
+               without_shaft=dict(ramp_rms_A=7.1, rms_A=89.1, rms_pct_std=42.9, mean_A=-1.2, speed_rms_rpm=0.43),
+               without_ovality=dict(ramp_rms_A=41.4, rms_A=27.4, rms_pct_std=13.2, mean_A=8.7, speed_rms_rpm=0.01)),
+    "g8": dict(i_std_A=187.8, noise_std_A=7.8,
+               without_effects=dict(ramp_rms_A=23.0, rms_A=47.3, rms_pct_std=25.2, mean_A=22.0, speed_rms_rpm=1.0),
+               without_coulomb=dict(ramp_rms_A=21.9, rms_A=21.7, rms_pct_std=11.6, mean_A=21.7, speed_rms_rpm=0.0),
+               without_lag=dict(ramp_rms_A=5.4, rms_A=41.9, rms_pct_std=22.3, mean_A=0.2, speed_rms_rpm=1.0)),
+}
 RECORDS = [
     PlantSpec("f1_free_torque", 40.0, 100.0, base=_NUIS, setup_kiln=dict(friction_law="torque"),
               layout="plain", note="no effect; the setup knows the torque law; kA and rad/s, 3 samples missing"),
@@ -589,6 +653,51 @@ RECORDS = [
     PlantSpec("f25b_j2_rigid", 30.0, 200.0, base=_NUIS, setup_kiln=dict(friction_law="torque"),
               effects={"J2": {"J": 25.0}}, expected=("second_motor",), layout="iso_uneven",
               note="f25's control: its 25 kg m^2 second motor rigidly on the shaft (the J2 form), the same logger"),
+    # fifth red team: further forms, nuisance and sensor faults (see the module's docstring); 40 s at 50 Hz each
+    PlantSpec("g1_free_nuisance", 40.0, 50.0, base=_G1_BASE, setup_kiln=dict(friction_law="torque"),
+              noise=(5.0, 0.3), ar1=(8.0, 0.3, 2.0), expected=(), layout="plain", visibility=_G_VIS.get("g1", {}),
+              note="no effect; besides f1's mismatches (m_v +4 %, mu_c -3 %, mu_s +3 %, J_v -5 %) the plant has J_o "
+                   "+5 %, J_m -4 %, k_i and k_b +3 %, L -3 %, R_a +8 %, mu_brg 0.0012 against the setup's Table 1, "
+                   "and coloured noise of 2 s correlation time (8 A, 0.3 rpm) on top of 5 A / 0.3 rpm white; a "
+                   "correct diagnosis selects nothing"),
+    PlantSpec("g2_motor_viscous", 40.0, 50.0, base=_NUIS, setup_kiln=dict(friction_law="torque"),
+              effects={"motor_viscous": {"b": 6.0}}, expected=("viscous_drag",), layout="plain",
+              visibility=_G_VIS.get("g2", {}),
+              note="viscous drag 6 N m s/rad on the motor shaft (314 N m, 68 A at 500 rpm); referred through the gear: "
+                   "B_o = 6 n^2 = 6.95e6 N m s/rad on the kiln axis"),
+    PlantSpec("g3_runout_paperlaw", 40.0, 50.0, base=_NUIS, effects={"runout": {"T": 4.0e5, "phi": -0.9}},
+              expected=("torque_friction_law", "kiln_unbalance"), layout="plain", visibility=_G_VIS.get("g3", {}),
+              note="girth-gear runout: load 4e5 max(0, sin(th_k - 0.9)) N m, zero until the kiln has turned 0.9 rad "
+                   "(about t = 22 s) and then rising (to 3.1e5 N m, 62 A, by 40 s at 1.78 rad); a kink, not a "
+                   "sine; the setup not knowing the torque law; kilnctl's form: T_unb of about 2e5 (first harmonic)"),
+    PlantSpec("g4_ilag", 40.0, 50.0, base=_NUIS, setup_kiln=dict(friction_law="torque"),
+              effects={"ilag": {"tau": 0.04}}, expected=(), layout="plain", visibility=_G_VIS.get("g4", {}),
+              note="current sensor of first order, 40 ms, on the logged current only (the loop does not see it); not "
+                   "in the catalogue: the right outcome is 'unexplained' or nothing selected, never a catalogue effect "
+                   "(speed_sensor_lag in particular would be wrong: the speed is measured without lag)"),
+    PlantSpec("g5_sgain_paperlaw", 40.0, 50.0, base=_NUIS, effects={"sgain": {"g": 1.03}},
+              expected=("torque_friction_law",), layout="plain", visibility=_G_VIS.get("g5", {}),
+              note="speed sensor reading 3 % high (fed back and logged: 1.03 w_m), so the kiln turns at 485 rpm "
+                   "motor speed while the record says 500 and accelerates 3 % slower than logged; not in the "
+                   "catalogue; the setup not knowing the torque law, so only torque_friction_law is right"),
+    PlantSpec("g6_j2_large_drag", 40.0, 50.0, base=_NUIS, setup_kiln=dict(friction_law="torque"),
+              effects={"J2": {"J": 60.0}, "motor_viscous": {"b": 4.0}}, expected=("second_motor", "viscous_drag"),
+              layout="plain", visibility=_G_VIS.get("g6", {}),
+              note="second motor of 60 kg m^2 (above the usual 10-45), rigid, and a viscous drag of 4 N m s/rad on the "
+                   "motor shaft (209 N m, 45 A at 500 rpm; B_o = 4.6e6 on the kiln axis); kilnctl's form: J_m2 = 60"),
+    PlantSpec("g7_shaft_unbalance", 40.0, 50.0, base=_NUIS, setup_kiln=dict(friction_law="torque"),
+              effects={"shaft": {"k": 400.0, "c": 12.0}, "ovality": {"T1": 3.0e5, "phi1": -0.8}},
+              expected=("drivetrain_compliance", "kiln_unbalance"), layout="plain", visibility=_G_VIS.get("g7", {}),
+              note="compliant shaft on the motor axis, 400 N m/rad and 12 N m s/rad (k_po = 4.6e8, C_po = 1.4e7 on "
+                   "the kiln axis; about 0.7 Hz against the held kiln) and a kiln unbalance 3e5 sin(th_k - 0.8) N m "
+                   "(-43 A at rest, through zero at t = 20 s, +50 A at 40 s; kilnctl's form: T_unb = 3e5); the plant "
+                   "has no backlash form, so this pair replaces the brief's backlash + unbalance"),
+    PlantSpec("g8_coulomb_lag", 40.0, 50.0, gains=(0.7, 2.5, 0.003), base=_NUIS, setup_kiln=dict(friction_law="torque"),
+              effects={"coulomb": {"T": 100.0}, "lag": {"tau": 0.015}},
+              expected=("motor_coulomb_friction", "speed_sensor_lag"), layout="plain", visibility=_G_VIS.get("g8", {}),
+              note="motor-side Coulomb friction 100 N m (22 A; f6 had 60) and a 15 ms first-order speed sensor (fed "
+                   "back and logged), on a drive tuned softer for the lag (k_p 0.7, k_I 2.5, k_D 0.003: the paper's "
+                   "gains diverge with it)"),
 ]
 
 
