@@ -775,8 +775,9 @@ class Diagnosis:
         record of a rigid second rotor and a 25 ms speed-sensor delay a stiff, heavily damped compliance won
         the first round (dBIC -2215) against the lag in its second-order form (-2047) and the second motor
         (-1528), each better by the whitened BIC; neither alone in its place fitted better, and the search went
-        on with the compliance.  Of the swaps better by every test the one of lowest dBIC is kept; the final
-        check then tests each of its effects at the final values.  Effects the backward check removed, or a
+        on with the compliance.  Of the swaps better by every test the one of lowest dBIC is kept; after a swap
+        :meth:`_search` runs the backward check again, and the final check tests each effect at the final
+        values.  Effects the backward check removed, or a
         swap replaced, are no rivals.  Each pair (winner, rival) whose refit ran is kept in ``swap_tried_``
         (two rivals together as a tuple of their names; the rival caution says so).
 
