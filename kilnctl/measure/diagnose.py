@@ -40,6 +40,7 @@ from __future__ import annotations
 import copy
 import math
 import time
+from contextlib import contextmanager
 from concurrent.futures.process import BrokenProcessPool
 
 import numpy as np
@@ -624,7 +625,7 @@ class Diagnosis:
                 continue
             cal.form_ = form.name  # every judgement of this refit (a re-anchored round's too) names its form
             ev = self._evidence(m, r.effect, cal, r.calibration, scales, train, test, exp, wall)
-            pinned = [fp.name for fp in form.parameters if _near_bound(fp, cal.values_[fp.name])]
+            pinned = _pinned(form, cal.values_)
             if pinned and ev.supported:
                 # the form's optimum lies beyond its physical range (a filter damped at 0.1 that rings at 50 Hz
                 # with a backlash's impacts): it stands in for something else
@@ -652,12 +653,18 @@ class Diagnosis:
     def _calibrate_in(self, forms, args):
         """:meth:`_calibrate` on ``args`` with the effects in ``forms`` ({effect: form name}; None: the
         diagnosis' own); None if it fails."""
-        saved = self._forms
-        self._forms = saved if forms is None else forms
         try:
-            return self._calibrate(*args)
+            with self._using_forms(self._forms if forms is None else forms):
+                return self._calibrate(*args)
         except KilnctlError:
             return None
+
+    @contextmanager
+    def _using_forms(self, forms):
+        """The effects fitted in ``forms`` ({effect: form name}) within the block, the diagnosis' own after."""
+        saved, self._forms = self._forms, forms
+        try:
+            yield
         finally:
             self._forms = saved
 
@@ -854,11 +861,8 @@ class Diagnosis:
         tries each rival's values whole as further starts."""
         forms = dict(self._forms, **{c.effect: c.form for c in group if c.form is not None})
         struct = tuple(x for s in selected for x in ((c.effect for c in group) if s == e else (s,)))
-        saved, self._forms = self._forms, forms
-        try:
+        with self._using_forms(forms):
             names = self._free_names(params, struct)
-        finally:
-            self._forms = saved
         first = {k: v for k, v in current.values_.items() if k in names}
         own = []
         for c in group:
@@ -887,18 +891,18 @@ class Diagnosis:
         notes = []
         for e in selected:
             form = CATALOGUE[e].form(self._forms[e]) if e in self._forms else None
-            pinned = [fp.name for fp in (form.parameters if form else ()) if _near_bound(fp, final.values_[fp.name])]
+            pinned = _pinned(form, final.values_) if form else []
             if not pinned:
                 continue
             forms = {k: v for k, v in self._forms.items() if k != e}
-            saved, self._forms = self._forms, forms
             try:
-                names = self._free_names(params, selected)
-                init = {k: v for k, v in final.values_.items() if k in names}
-                own = self._calibrate(m, params, selected, "std", None, init, (), exp, None, None, 1, True)
+                with self._using_forms(forms):
+                    names = self._free_names(params, selected)
+                    init = {k: v for k, v in final.values_.items() if k in names}
+                    own = self._calibrate(m, params, selected, "std", None, init, (), exp, None, None, 1, True)
             except KilnctlError:  # kept in its form: the final check judges it there
-                self._forms = saved
                 continue
+            self._forms = forms
             at = ", ".join(f"{k} = {final.values_[k]:.3g}" for k in pinned)
             notes.append(f"{e} was selected in its {form.name} form, but at the final fit its {at} ended at a bound "
                          f"of its range: there the form stands in for another difference, so {e} is fitted in its "
@@ -1539,14 +1543,18 @@ def _falls(m, exp):
     return breakaways(m.t[active], m.current[active], t_from=exp.steady_from)
 
 
-def _near_bound(fp, value: float) -> bool:
-    """True when ``value`` of the free parameter ``fp`` lies within :data:`FORM_BOUND` of its range from a bound
-    (of the range of its logarithm when ``fp.kind`` is 'log')."""
-    if fp.kind == "log":
-        lo, hi, v = math.log(fp.lower), math.log(fp.upper), math.log(max(value, fp.lower))
-    else:
-        lo, hi, v = fp.lower, fp.upper, value
-    return min(v - lo, hi - v) < FORM_BOUND * (hi - lo)
+def _pinned(form, values: dict) -> list[str]:
+    """The names of ``form``'s added parameters whose ``values`` lie within :data:`FORM_BOUND` of their range
+    from a bound (of the range of the logarithm for a 'log' parameter)."""
+    out = []
+    for fp in form.parameters:
+        if fp.kind == "log":
+            lo, hi, v = math.log(fp.lower), math.log(fp.upper), math.log(max(values[fp.name], fp.lower))
+        else:
+            lo, hi, v = fp.lower, fp.upper, values[fp.name]
+        if min(v - lo, hi - v) < FORM_BOUND * (hi - lo):
+            out.append(fp.name)
+    return out
 
 
 def _far(values: dict, setup: dict) -> bool:
