@@ -544,7 +544,8 @@ class Diagnosis:
             final = base
         self.final_search_ = _search_summary(final)
         final, form_notes = self._final_forms(m, params, tuple(selected), final, exp, say)
-        selected, final, dropped = self._final_check(m, params, selected, final, scales, train, test, exp, say)
+        selected, final, dropped = self._final_check(m, params, selected, final, scales, train, test, exp, say,
+                                                     pool)
         self.swaps_ = {k: v for k, v in self.swaps_.items() if k in selected}
         self.forms_ = {e: f for e, f in self._forms.items() if e in selected}
         self.removed_ = list(self.removed_) + dropped
@@ -912,50 +913,55 @@ class Diagnosis:
             final = own
         return final, notes
 
-    def _final_check(self, m, params, selected, final, scales, train, test, exp, say):
-        """Every effect of the final model must matter at its final values, on the whole record.
+    def _final_check(self, m, params, selected, final, scales, train, test, exp, say, pool=None):
+        """Every effect of the final model must earn its place on the whole record, the others refitted without it.
 
         The greedy rounds judge an effect by refits on the fitting part, where its parameters can buy the
         others an escape from a valley that the final fit, from more starts on the whole record, leaves
         anyway: the effect then ends at or near its null value (a drag of 8 N m s/rad) or inactive (a current
-        limit above the peak current), while the rounds credited it with the escape.  For each selected
-        effect the structure without it is judged at the final values (no refit, :meth:`Calibration.fit`
-        with ``n_local=0``).  Its BIC is an upper bound of what that structure reaches, so when it is not
-        more than ``min_delta_bic`` above the final model's the effect fails the criterion it was selected
-        by, on the record as a whole.  An effect whose final values contradict its own signature
-        (:attr:`~kilnctl.model.catalogue.Effect.contradicts`, as the rounds require of every candidate: a drive
-        train so damped that it cannot ring) is weak too, however much it lowers the BIC: the final fit, from
-        other starts, can end where the rounds would have refused it (red team 4's second-order speed filter:
-        a compliance of damping ratio about 480).  The effect with the weakest evidence is removed, the rest is
-        refitted from there (one local fit, never ending above its start) and the check repeats.
+        limit above the peak current), while the rounds credited it with the escape.  And an effect chosen
+        beside another that stood in for a third can lose its role once the final fit has moved the rest.  For
+        each selected effect the structure without it is refitted on the whole record from the final values
+        (one local fit each, in the pool when given; a refit never ends above its start, so it fits at least
+        as well as the structure without the effect at the final values): when the final model's BIC is not
+        more than ``min_delta_bic`` below that refit's, the effect fails the criterion it was selected by, on
+        the record as a whole (red team 5's g8: a second motor of 1.2 kg m^2 beside a speed filter, a Coulomb
+        friction and a drag; refitted without it the model's BIC fell by 103).  An effect whose final values
+        contradict its own signature (:attr:`~kilnctl.model.catalogue.Effect.contradicts`, as the rounds
+        require of every candidate: a drive train so damped that it cannot ring) is weak too, however much it
+        lowers the BIC: the final fit, from other starts, can end where the rounds would have refused it (red
+        team 4's second-order speed filter: a compliance of damping ratio about 480).  The effect with the
+        weakest evidence is removed, the refit without it is the final model, and the check repeats.
 
         Returns
         -------
         (list of str, Calibration, list of CandidateResult)
             The selection kept, its calibration on the whole record, and a result for each removed effect
-            (its dBIC is the final model's against the structure without it, both on the whole record).
+            (its dBIC is the final model's against the structure without it refitted, both on the whole record).
         """
         selected, dropped = list(selected), []
         while selected:
-            trials = []
+            args = []
             for e in selected:
                 rest = tuple(x for x in selected if x != e)
                 names = self._free_names(params, rest)
                 init = {k: v for k, v in final.values_.items() if k in names}
-                try:
-                    without = self._calibrate(m, params, rest, "std", None, init, (), exp, None, None, 0, True)
-                except KilnctlError:  # the structure without e cannot be run at these values: e stays
+                args.append((m, params, rest, "std", None, init, (), exp, None, None, 1, True))
+            trials = []
+            for e, a, without in zip(selected, args, self._run_calibrations(args, pool)):
+                if without is None:  # the structure without e cannot be refitted from here: e stays
                     continue
                 r = self._evidence(m, e, final, without, scales, train, test, exp, 0.0)
                 eff = CATALOGUE[e]
                 odd = eff.contradicts(final.values_, final.params_) if eff.contradicts else None
-                trials.append((e, rest, init, r, odd))
+                trials.append((e, a, without, r, odd))
             weak = [tr for tr in trials if not tr[3].delta_bic < -self.min_delta_bic or tr[4]]
             if not weak:
                 break
-            e, rest, init, r, odd = max(weak, key=lambda tr: tr[3].delta_bic)
-            try:
-                refit = self._calibrate(m, params, rest, "std", None, init, (), exp, None, None, 1, True)
+            e, a, without, r, odd = max(weak, key=lambda tr: tr[3].delta_bic)
+            try:  # the refit's values, evaluated here (a worker's calibration travels without its simulation)
+                refit = self._calibrate(m, params, a[2], "std", None, dict(without.values_), (), exp, None, None, 0,
+                                        True)
             except KilnctlError:
                 break
             r.supported = False
@@ -967,14 +973,13 @@ class Diagnosis:
                             f"{r.delta_bic:+.1f})")
                 say(f"removed {e} in the final check: at the final values it no longer shows its own signature")
             else:
-                r.reason = (f"removed in the final check: at the final fit's values the model without it fits the "
-                            f"whole record as well (dBIC of keeping it {r.delta_bic:+.1f}, not below "
-                            f"{-self.min_delta_bic:g}); its gain in the rounds came from a better fit of the other "
-                            f"parameters")
-                say(f"removed {e} in the final check: at the final values it changes the fit by dBIC "
-                    f"{r.delta_bic:+.1f} only")
+                r.reason = (f"removed in the final check: the model without it, refitted on the whole record from "
+                            f"the final fit's values, fits as well (dBIC of keeping it {r.delta_bic:+.1f}, not below "
+                            f"{-self.min_delta_bic:g}): the other parameters take its place")
+                say(f"removed {e} in the final check: refitted without it, the model fits as well (dBIC of "
+                    f"keeping it {r.delta_bic:+.1f})")
             dropped.append(r)
-            selected, final = list(rest), refit
+            selected, final = list(a[2]), refit
         return selected, final, dropped
 
     def _settings(self) -> "Diagnosis":
