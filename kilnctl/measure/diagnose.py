@@ -29,8 +29,8 @@ The procedure (``docs/tutorial_diagnose.md``):
    later ones are in (backward check), and put in a rival that its round's
    winner beat by less than the BIC threshold when the model with it fits
    better by every test (swap check);
-7. refit the final structure on the whole record, drop an effect that no
-   longer matters at the final values (final check), and describe what is left
+7. refit the final structure on the whole record, drop an effect that the
+   others, refitted without it, replace there (final check), and describe what is left
    of the residual (dominant frequency, correlation with the kiln angle,
    speed, acceleration, current) when it still has structure.
 """
@@ -784,8 +784,8 @@ class Diagnosis:
         the first round (dBIC -2215) against the lag in its second-order form (-2047) and the second motor
         (-1528), each better by the whitened BIC; neither alone in its place fitted better, and the search went
         on with the compliance.  Of the swaps better by every test the one of lowest dBIC is kept; after a swap
-        :meth:`_search` runs the backward check again, and the final check tests each effect at the final
-        values.  Effects the backward check removed, or a
+        :meth:`_search` runs the backward check again, and the final check tests each effect on the whole
+        record against the others refitted without it.  Effects the backward check removed, or a
         swap replaced, are no rivals.  Each pair (winner, rival) whose refit ran is kept in ``swap_tried_``
         (two rivals together as a tuple of their names; the rival caution says so).
 
