@@ -961,6 +961,36 @@ def test_final_check_removes_a_compliance_whose_final_values_cannot_ring():
     assert selected == ["speed_sensor_lag", "drivetrain_compliance"] and dropped == []
 
 
+def test_final_check_judges_at_the_final_values_when_the_refit_without_an_effect_fails():
+    # truth by construction: the refit of the structure without the drag fails (KilnctlError, as when the model
+    # cannot be run where a local fit went); the structure without it is then judged at the final values, as
+    # before the final check refitted, and the drag, which changes the BIC there by +3 only, is removed.  The
+    # calibrations and the evidence are stand-ins: only the check's logic is tested
+    from kilnctl.errors import KilnctlError
+    from kilnctl.measure.evidence import CandidateResult
+
+    d = Diagnosis(SETUP)
+    base = {"mu_c": 0.39, "mu_s": 0.52, "m_v": 6.0e5, "J_v": 1.6e6}
+    final = SimpleNamespace(values_=dict(base, J_m2=30.0, B_o=1e3), params_=SETUP, cost_=1.0)
+    calls = []
+
+    def calibrate(m, params, rest, *a):
+        calls.append((rest, a[-2]))
+        if a[-2] == 1 and rest == ("second_motor",):
+            raise KilnctlError("the model cannot be run at the fitted values")
+        return SimpleNamespace(values_=dict(a[2]), params_=SETUP, cost_=1.0, effects=rest)
+
+    d._calibrate = calibrate
+    d._evidence = lambda m, e, cal, without, *a: CandidateResult(e, 3.0 if e == "viscous_drag" else -500.0, 0.0, {},
+                                                                 {}, {}, [], [], True, "", 0.0)
+    selected, kept, dropped = d._final_check(None, SETUP, ["second_motor", "viscous_drag"], final, None, None, None,
+                                             None, lambda s: None)
+    assert selected == ["second_motor"] and [r.effect for r in dropped] == ["viscous_drag"]
+    # the refit failed, then the structure was judged at the final values (and, once chosen, evaluated there)
+    assert [n for rest, n in calls if rest == ("second_motor",)] == [1, 0, 0]
+    assert "B_o" not in kept.values_ and kept.values_["J_m2"] == 30.0
+
+
 @pytest.mark.slow  # about a minute: seven local fits of stick-slip structures on a 40 s record at 50 Hz
 def test_final_check_refits_the_others_and_removes_an_effect_they_replace(tmp_path):
     # truth: red team 5's g8 (benchmarks/foreign_records.py, the independently written plant): a motor Coulomb

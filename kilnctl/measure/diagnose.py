@@ -949,8 +949,11 @@ class Diagnosis:
                 args.append((m, params, rest, "std", None, init, (), exp, None, None, 1, True))
             trials = []
             for e, a, without in zip(selected, args, self._run_calibrations(args, pool)):
-                if without is None:  # the structure without e cannot be refitted from here: e stays
-                    continue
+                if without is None:  # its refit failed: the structure without e at the final values
+                    try:
+                        without = self._calibrate(*a[:10], 0, True)
+                    except KilnctlError:  # nor can it be run there: e stays
+                        continue
                 r = self._evidence(m, e, final, without, scales, train, test, exp, 0.0)
                 eff = CATALOGUE[e]
                 odd = eff.contradicts(final.values_, final.params_) if eff.contradicts else None
