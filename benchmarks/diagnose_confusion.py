@@ -239,7 +239,19 @@ def _hard_one(job):
             "oracle_error": oracle_error,
             "outside_change": _clean(getattr(d, "outside_change_", None)),
             "final_search": _clean(getattr(d, "final_search_", None)),
-            "removed": [r.effect for r in getattr(d, "removed_", [])]}
+            "removed": [r.effect for r in getattr(d, "removed_", [])],
+            "rounds": [[_evidence_row(r) for r in results] for results in getattr(d, "rounds_", [])],
+            "checks": [dict(_evidence_row(r), check=kind) for kind, r in getattr(d, "checks_", [])],
+            "removed_evidence": [_evidence_row(r) for r in getattr(d, "removed_", [])]}
+
+
+def _evidence_row(r) -> dict:
+    """A candidate's evidence in a few numbers (to screen a change of the evidence rules without a re-run)."""
+    return _clean({"effect": r.effect, "form": getattr(r, "form", None), "supported": bool(r.supported),
+                   "delta_bic": r.delta_bic, "delta_bic_corrected": getattr(r, "delta_bic_corrected", None),
+                   "holdout_gain": r.holdout_gain, "holdout_z": getattr(r, "holdout_z", None),
+                   "heldout_share": getattr(r, "heldout_share", None),
+                   "fit_current": r.fit_percent.get("current_A"), "reason": r.reason[:200]})
 
 
 def _save(path, results, meta):

@@ -192,6 +192,11 @@ class Diagnosis:
         Every form tried (see :meth:`_in_best_form`): the effect, the form's name, its evidence against the
         effect in its own form, whether the candidate was then judged in it (the supported form of lowest
         BIC), and the effects of the model it was a candidate for.
+    checks_ : list of (str, CandidateResult)
+        Every judgement of a selected effect in the backward check (``"backward"``, on the fitting part) and
+        the final check (``"final"``, on the whole record): the check and the effect's evidence, keeping it
+        against the model without it refitted (removed or kept: ``supported`` in the backward check, ``dBIC``
+        below the threshold and its own signature in the final check).
     swap_tried_ : set of tuple
         The (winner, rival) pairs the swap check refitted with the rival in the winner's place (two rivals
         refitted together: (winner, (rival, rival))).
@@ -419,6 +424,7 @@ class Diagnosis:
         wall0 = time.perf_counter()
         self._forms = {}
         self.form_results_ = []
+        self.checks_ = []
         params = resolve_gains(self.params)
         exp = measurement.experiment(params, t0=self.t0)
         m = measurement
@@ -749,6 +755,7 @@ class Diagnosis:
                     continue
                 r = self._evidence(m, e, current, cal, scales, train, test, exp, 0.0)
                 trials.append((e, a[2], cal, r))
+                self._note_check("backward", r)
                 say(f"  backward check: without {e:<22} dBIC {r.delta_bic:+10.1f} (whitened "
                     f"{r.delta_bic_corrected:+8.1f})  held-out gain {r.holdout_gain:+6.1f} %  "
                     f"{'kept' if r.supported else 'not needed'}")
@@ -958,6 +965,7 @@ class Diagnosis:
                 eff = CATALOGUE[e]
                 odd = eff.contradicts(final.values_, final.params_) if eff.contradicts else None
                 trials.append((e, a, without, r, odd))
+                self._note_check("final", r)
             weak = [tr for tr in trials if not tr[3].delta_bic < -self.min_delta_bic or tr[4]]
             if not weak:
                 break
@@ -984,6 +992,10 @@ class Diagnosis:
             dropped.append(r)
             selected, final = list(a[2]), refit
         return selected, final, dropped
+
+    def _note_check(self, check: str, r) -> None:
+        """Keep a check's judgement of a selected effect in ``checks_``."""
+        self.__dict__.setdefault("checks_", []).append((check, r))
 
     def _settings(self) -> "Diagnosis":
         """A copy with the settings only, sent to worker processes (a fitted Diagnosis carries its results)."""
