@@ -985,9 +985,9 @@ class Diagnosis:
                 say(f"removed {e} in the final check: at the final values it no longer shows its own signature")
             else:
                 r.reason = (f"removed in the final check: the model without it, refitted on the whole record from "
-                            f"the final fit's values, fits as well (dBIC of keeping it {r.delta_bic:+.1f}, not below "
-                            f"{-self.min_delta_bic:g}): the other parameters take its place")
-                say(f"removed {e} in the final check: refitted without it, the model fits as well (dBIC of "
+                            f"the final fit's values, fits as well or better (dBIC of keeping it {r.delta_bic:+.1f}, "
+                            f"not below {-self.min_delta_bic:g}): the other parameters take its place")
+                say(f"removed {e} in the final check: refitted without it, the model fits as well or better (dBIC of "
                     f"keeping it {r.delta_bic:+.1f})")
             dropped.append(r)
             selected, final = list(a[2]), refit
