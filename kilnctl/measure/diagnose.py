@@ -195,8 +195,9 @@ class Diagnosis:
     checks_ : list of (str, CandidateResult)
         Every judgement of a selected effect in the backward check (``"backward"``, on the fitting part) and
         the final check (``"final"``, on the whole record): the check and the effect's evidence, keeping it
-        against the model without it refitted (removed or kept: ``supported`` in the backward check, ``dBIC``
-        below the threshold and its own signature in the final check).
+        against the model without it refitted (in the final check at the final values when that refit failed;
+        kept: ``supported`` in the backward check, ``dBIC`` below the threshold and its own signature in the
+        final check).
     swap_tried_ : set of tuple
         The (winner, rival) pairs the swap check refitted with the rival in the winner's place (two rivals
         refitted together: (winner, (rival, rival))).
