@@ -107,3 +107,28 @@ def test_comparison_figure_names_the_record_and_labels_its_axes():
     assert title.startswith("example_record.csv") and "/" not in title
     assert any("Dashed vertical lines" in t for t in _texts(fig))  # the caption explains lines and shading
     assert np.isfinite(c.channels["current_A"].fit)
+
+
+def test_comparison_legends_stay_inside_their_panels_with_a_long_final_structure():
+    """A diagnosis' final structure of three effects named in the legend ran over the next panels.
+
+    Truth: the drawn geometry (the renderer's extents of each legend and of its axes), not the label text.
+    """
+    from kilnctl.measure import compare, example_paths, load_setup, read_csv
+
+    record, setup_path = example_paths()
+    setup = load_setup(setup_path)
+    c = compare(read_csv(record, setup.params), setup.params, t0=setup.options.get("t0_s"))
+    long = "final: base + speed_sensor_lag (second-order form), motor_coulomb_friction, viscous_drag"
+    fig = c.plot(compare_with=c, labels=("calibrated base", long))
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    canvas = FigureCanvasAgg(fig)
+    canvas.draw()
+    r = canvas.get_renderer()
+    legends = [(ax, ax.get_legend()) for ax in fig.axes if ax.get_legend() is not None]
+    assert len(legends) == 4  # the first row's four panels
+    for ax, leg in legends:
+        box, frame = leg.get_window_extent(r), ax.get_window_extent(r)
+        assert frame.x0 - 1 <= box.x0 and box.x1 <= frame.x1 + 1, ax.get_title()
+    assert any("viscous_drag" in t.get_text() for t in legends[0][1].get_texts())  # named in full where wide

@@ -11,6 +11,7 @@
 from __future__ import annotations
 
 import math
+import textwrap
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -25,6 +26,9 @@ __all__ = ["Comparison", "ChannelComparison", "compare", "compare_run", "level_c
 
 #: default largest correlation lag [s]
 MAX_LAG_S = 5.0
+
+#: longest line of a model's name in the legends of :meth:`Comparison.plot` [characters]
+LEGEND_CHARS = 34
 
 
 #: ratios of the model's to the record's signal spread that, with a fit below 0 %, are read as a unit or setup
@@ -274,6 +278,11 @@ class Comparison:
                             gridspec_kw={"width_ratios": [3, 3, 2, 2]})
         c_mod, c_ext = COLORS["model"], COLORS["final"]
         names = {"current_A": "current", "speed_rpm": "speed"}
+        # a model's name in the legends wrapped to the panels' width (a final structure of three effects in
+        # one line ran over the neighbouring panels); the narrow correlation and spectrum panels name each model
+        # by what comes before a colon ("final: base + ..." -> "final"), its colour tells the rest
+        short = tuple(lab.split(":")[0] for lab in labels)
+        labels = tuple("\n".join(textwrap.wrap(lab, LEGEND_CHARS)) for lab in labels)
         for row, (k, c) in enumerate(self.channels.items()):
             a0, a1, a2, a3 = axes[row]
             q = names.get(k, k)
@@ -297,18 +306,18 @@ class Comparison:
             a1.set_title(f"{q} residual (measured - model)", fontsize=9)
             w = c.whiteness
             lag_s = w["lags"] * self.dt
-            a2.bar(lag_s[1:], w["r"][1:], width=self.dt, color=c_mod, label=labels[0])
+            a2.bar(lag_s[1:], w["r"][1:], width=self.dt, color=c_mod, label=short[0])
             if compare_with is not None:
                 w2 = compare_with.channels[k].whiteness
-                a2.plot(w2["lags"][1:] * compare_with.dt, w2["r"][1:], color=c_ext, lw=1.0, label=labels[1])
+                a2.plot(w2["lags"][1:] * compare_with.dt, w2["r"][1:], color=c_ext, lw=1.0, label=short[1])
             a2.axhspan(-w["band"], w["band"], color="gray", alpha=0.2, label="99 % band of white noise")
             a2.set_title(f"residual autocorrelation ({w['n_outside']} lags out)", fontsize=9)
             a2.set_ylabel("autocorrelation [-]")
             s = c.spectrum
-            a3.semilogy(s["f"][1:], s["psd"][1:], color=c_mod, label=labels[0])
+            a3.semilogy(s["f"][1:], s["psd"][1:], color=c_mod, label=short[0])
             if compare_with is not None:
                 s2 = compare_with.channels[k].spectrum
-                a3.semilogy(s2["f"][1:], s2["psd"][1:], color=c_ext, ls="--", label=labels[1])
+                a3.semilogy(s2["f"][1:], s2["psd"][1:], color=c_ext, ls="--", label=short[1])
             a3.axvline(s["dominant_hz"], color="gray", ls=":", label=f"peak {s['dominant_hz']:.2f} Hz")
             a3.set_title("residual spectrum", fontsize=9)
             a3.set_ylabel(f"PSD [{c.unit}$^2$/Hz]")
