@@ -13,9 +13,9 @@ from kilnctl.cli import build_parser
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def _run(*argv):
+def _run(*argv, module="kilnctl.cli"):
     env = dict(os.environ, PYTHONPATH=str(ROOT))
-    return subprocess.run([sys.executable, "-m", "kilnctl.cli", *argv], capture_output=True, text=True,
+    return subprocess.run([sys.executable, "-m", module, *argv], capture_output=True, text=True,
                           env=env, timeout=120)
 
 
@@ -55,6 +55,9 @@ def test_unknown_option_shows_the_subcommand_usage(argv, usage):
     assert f"see kilnctl {argv[0]} --help" in r.stderr
 
 
-def test_version_is_the_package_version():
-    r = _run("--version")
+@pytest.mark.parametrize("module", ["kilnctl.cli", "kilnctl"])
+def test_version_is_the_package_version(module):
+    # `python -m kilnctl` is what a user tries without the console script on PATH (it said "No module named
+    # kilnctl.__main__"); both entry points are the same command
+    r = _run("--version", module=module)
     assert r.returncode == 0 and r.stdout.strip() == f"kilnctl {kilnctl.__version__}"

@@ -19,8 +19,8 @@ import pytest
 import kilnctl
 
 ROOT = Path(__file__).resolve().parents[1]
-#: modules that run something on import (the ``python -m kilnctl.cli`` entry point)
-NOT_IMPORTED = {"kilnctl.cli.__main__"}
+#: modules that run something on import (the ``python -m kilnctl.cli`` and ``python -m kilnctl`` entry points)
+NOT_IMPORTED = {"kilnctl.cli.__main__", "kilnctl.__main__"}
 MODULES = sorted(m.name for m in pkgutil.walk_packages(kilnctl.__path__, "kilnctl.") if m.name not in NOT_IMPORTED)
 
 

@@ -35,7 +35,8 @@ ROOT = Path(__file__).resolve().parents[1] / "kilnctl"
 #: style (colours, fonts, writing a figure whole; it imports only errors and files), used by the ``.plot()``
 #: methods of the analysis objects of every layer, so it sits at the bottom; ``assumptions`` renders docs.
 #: ``structure`` resolves catalogue effects (measure/effects.py), so it sits with the measurement tools; the
-#: simulator and the linearization below it take a Structure through its methods only.
+#: simulator and the linearization below it take a Structure through its methods only.  ``__main__`` is
+#: ``python -m kilnctl``, the command line's second entry point.
 LAYERS = (
     ("errors", "units", "params", "gains", "files", "budget", "figures"),
     ("model",),
@@ -43,7 +44,7 @@ LAYERS = (
     ("linear", "linearize"),
     ("design", "verify", "optimize", "measure", "sweep", "structure"),
     ("report", "pages", "assumptions", "close_loop"),
-    ("cli", "demo", "demo_ramp"),
+    ("cli", "__main__", "demo", "demo_ramp"),
 )
 LAYER = {unit: i for i, names in enumerate(LAYERS) for unit in names}
 
