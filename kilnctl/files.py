@@ -49,10 +49,19 @@ def atomic_path(path, suffix: str | None = None):
     ------
     pathlib.Path
         Where to write.
+
+    Raises
+    ------
+    ConfigFileError
+        The folder cannot be made or written into (a file on its path, no permission); nothing is written.
     """
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".tmp-", suffix=path.suffix if suffix is None else suffix)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".tmp-", suffix=path.suffix if suffix is None else suffix)
+    except OSError as exc:  # a file on the folder's path, no permission, a read-only or pseudo file system
+        raise ConfigFileError(f"{path}: cannot write it in {path.parent} ({exc.strerror or exc}); give a path in a "
+                              "folder you may write into") from None
     os.close(fd)
     try:
         yield Path(tmp)

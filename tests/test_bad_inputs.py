@@ -117,6 +117,13 @@ OPTIONS = [
     ("diagnose_report_is_data", ["diagnose", "--data", "{rec}", "--report", "{rec}"], ["--report", "--data"]),
     ("diagnose_candidates", ["diagnose", "--data", "{rec}", "--candidates", "a,,b"], ["--candidates"]),
     ("sweep_spec_missing", ["sweep", "{dir}/none.toml"], ["none.toml", "no such"]),
+    # an output below a plain file: refused before the work, naming the option, the output and the file in the way
+    # (was a FileExistsError traceback after the simulation)
+    ("simulate_csv_below_file", ["simulate", "--csv", "{file}/x.csv"], ["--csv", "plain.txt/x.csv", "is a file"]),
+    ("simulate_plot_below_file", ["simulate", "--plot", "{file}/s.png"], ["--plot", "plain.txt/s.png", "is a file"]),
+    ("design_plot_below_file", ["design", "--plot", "{file}/d.png"], ["--plot", "plain.txt/d.png", "is a file"]),
+    ("verify_report_below_file", ["verify", "--report", "{file}/sub"], ["--report", "plain.txt", "is a file"]),
+    ("optimize_report_file", ["optimize-ramp", "--report", "{file}"], ["--report", "plain.txt", "is a file"]),
     ("sweep_spec_dir", ["sweep", "{dir}"], ["folder"]),
 ]
 
@@ -287,3 +294,14 @@ def test_parameters_api_refuses_the_same_values():
     for kw in ({"R_a": 1e300}, {"m_v": 1e300}, {"delta_x": 8.0}):
         with pytest.raises(ParameterError, match=next(iter(kw))):
             Parameters(**kw)
+
+
+def test_an_output_that_cannot_be_written_is_an_error_naming_it(tmp_path):
+    # truth: a plain file made by hand stands where the output's folder would be; nothing may be left behind
+    from kilnctl.errors import ConfigFileError
+    from kilnctl.files import write_atomic
+
+    (tmp_path / "plain.txt").write_text("keep")
+    with pytest.raises(ConfigFileError, match=r"plain\.txt/out\.csv: cannot write it"):
+        write_atomic(tmp_path / "plain.txt" / "out.csv", "a,b\n")
+    assert (tmp_path / "plain.txt").read_text() == "keep" and sorted(p.name for p in tmp_path.iterdir()) == ["plain.txt"]

@@ -218,6 +218,8 @@ def check_output_files(outputs: dict, inputs: dict) -> None:
                 raise ConfigFileError(f"{flag} {path} is the {what} file: refusing to overwrite it")
         if path.is_dir():
             raise ConfigFileError(f"{flag} {path} is a folder: give a file name")
+        # a file (or a folder this user may not write into) on the path would stop the writing only after the work
+        check_folder_can_be_made(flag, path.parent if path.exists() else path)
     for i, (flag, path) in enumerate(outs):
         for other, path2 in outs[i + 1:]:
             if same_file(path, path2):

@@ -16,8 +16,8 @@ from __future__ import annotations
 import sys
 
 from . import print_json
-from .common import (Command, add_config_arg, add_options, check_output_files, learned_structure_args,
-                     load_params)
+from .common import (Command, add_config_arg, add_options, check_folder_can_be_made, check_output_files,
+                     learned_structure_args, load_params)
 
 #: exit code of a result that the hybrid verification flagged
 EXIT_FLAGGED = 3
@@ -71,6 +71,8 @@ class OptimizeRampCommand(Command):
         from ..optimize.robust import price_of_robustness
 
         check_output_files({"--plot": args.plot}, {"--config": args.config})
+        if args.report:
+            check_folder_can_be_made("--report", args.report)
         params = load_params(args)
         structure, params, _, _ = learned_structure_args(args, params, "micro")
         problem = RampProblem(params, profile=args.profile, t_max=args.t_max, horizon=args.horizon,

@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 from . import print_json
-from .common import (Command, add_config_arg, add_options, check_output_files, learned_structure_args,
-                     load_params)
+from .common import (Command, add_config_arg, add_options, check_folder_can_be_made, check_output_files,
+                     learned_structure_args, load_params)
 
 
 class VerifyCommand(Command):
@@ -34,6 +34,8 @@ class VerifyCommand(Command):
         from ..verify import verify
 
         check_output_files({"--plot": args.plot}, {"--config": args.config})
+        if args.report:
+            check_folder_can_be_made("--report", args.report)
         params = load_params(args)
         components, params, _, _ = learned_structure_args(args, params, args.model)
         v = verify(params, model=args.model, t_end=args.t_end, components=components)
