@@ -154,6 +154,17 @@ def test_setup_file_with_measurement_section(tmp_path):
         load_setup(p)
 
 
+def test_setup_file_saved_with_a_bom_or_in_latin1_is_refused_naming_the_file_and_the_fix(tmp_path):
+    # truth: the bytes written here by hand -- Notepad's "UTF-8 with BOM" and a Windows-1252 comment
+    p = tmp_path / "setup.toml"
+    p.write_bytes(b"\xef\xbb\xbf[kiln]\nm_v = 6e5\n")
+    with pytest.raises(ConfigFileError, match=r"setup\.toml: .*byte-order mark.*without BOM"):
+        load_setup(p)
+    p.write_bytes("[kiln]\n# B\u00fcrde\nm_v = 6e5\n".encode("latin-1"))
+    with pytest.raises(ConfigFileError, match=r"setup\.toml: .*not UTF-8.*save it as UTF-8"):
+        load_setup(p)
+
+
 def test_experiment_without_reference_starts_where_the_speed_rises():
     # truth: the speed of the setup's own drive (model simulated from rest) whose 74 rpm/s ramp starts at 2.0 s,
     # after 2 s at rest, sampled at 100 Hz off the simulation's grid; a drive's speed lags its reference, and the

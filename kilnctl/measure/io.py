@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import math
 import re
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
@@ -31,6 +30,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from ..errors import ConfigFileError, DataError, ParameterError, close_matches_hint
+from ..files import read_toml
 from ..params import GROUPS, SPECS, Parameters
 from ..units import RPM_PER_RAD_S
 from .reference import fit_scurve
@@ -1260,14 +1260,9 @@ def load_setup(path=None) -> Setup:
     if path is None:
         return Setup(Parameters())
     path = Path(path)
-    try:
-        raw = tomllib.loads(path.read_text())
-    except FileNotFoundError:
-        raise ConfigFileError(f"{path}: no such setup file") from None
-    except IsADirectoryError:
-        raise ConfigFileError(f"{path}: is a folder, not a setup file") from None
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise ConfigFileError(f"{path}: not a valid TOML file ({exc})") from None
+    # the reader of every kilnctl TOML file: names a byte-order mark, a file that is not UTF-8 and an unreadable
+    # file with the fix (a setup saved by Notepad as 'UTF-8 with BOM' was "Invalid statement (at line 1, column 1)")
+    raw = read_toml(path, "setup file")
     options = raw.pop("measurement", {})
     if not isinstance(options, dict):
         raise ConfigFileError(f"{path}: 'measurement' must be a section [measurement]")
