@@ -165,6 +165,28 @@ def test_setup_file_saved_with_a_bom_or_in_latin1_is_refused_naming_the_file_and
         load_setup(p)
 
 
+def test_t0_after_the_record_is_refused_naming_t0_s(tmp_path):
+    # truth: a hand-made record of 2 s at rest then a 74 rpm/s ramp, sampled at 50 Hz for 10 s; a t0_s of
+    # 100 s lies after its last sample (9.98 s) and 9.95 s leaves 2 samples (9.96, 9.98) (was an IndexError deep in the model run)
+    from kilnctl.measure import compare
+
+    t = np.arange(0, 10, 0.02)
+    speed = np.clip(74.0 * (t - 2.0), 0.0, 500.0)
+    rows = "".join(f"{a:.2f},{100.0 + 0.5 * w + 3 * np.sin(7 * a):.3f},{w + 0.1 * np.sin(13 * a):.3f}\n"
+                   for a, w in zip(t, speed))
+    rec = tmp_path / "rec.csv"
+    rec.write_text("time_s,current_A,speed_rpm\n" + rows)
+    m = read_csv(rec)
+    for t0, said in ((100.0, "0 sample"), (9.95, "2 sample"), (float("nan"), "finite")):
+        with pytest.raises(ParameterError, match=rf"rec\.csv: t0 .*t0_s.*{said}"):
+            compare(m, Parameters(), t0=t0)
+    setup = tmp_path / "setup.toml"
+    setup.write_text("[measurement]\nt0_s = 100.0\n")
+    from kilnctl.cli import main
+
+    assert main(["compare", "--data", str(rec), "--config", str(setup)]) == 2
+
+
 def test_experiment_without_reference_starts_where_the_speed_rises():
     # truth: the speed of the setup's own drive (model simulated from rest) whose 74 rpm/s ramp starts at 2.0 s,
     # after 2 s at rest, sampled at 100 Hz off the simulation's grid; a drive's speed lags its reference, and the

@@ -244,7 +244,15 @@ class Measurement:
         Returns
         -------
         Experiment
+
+        Raises
+        ------
+        ParameterError
+            ``t0`` is not a finite number, or leaves less than a record (:data:`MIN_SAMPLES` samples over
+            :data:`MIN_DURATION_S`) after it.
         """
+        if t0 is not None:
+            t0 = self._checked_t0(t0)
         ref = self.speed_ref
         notes = []
         if ref is None:
@@ -291,6 +299,25 @@ class Measurement:
                              "the recorded value is used")
         notes.append(f"start-up begins at t = {start:.3f} s (from the recorded speed reference)")
         return Experiment(float(start), float(rate), float(top), "recorded speed_ref_rpm", tuple(notes), jerk)
+
+    def _checked_t0(self, t0) -> float:
+        """``t0`` as a float, refused when it is not a time in the record with a record's worth of samples after it."""
+        what = "t0 (the start of the start-up in record time; setup file: [measurement] t0_s)"
+        try:
+            value = float(t0)
+        except (TypeError, ValueError):
+            value = math.nan
+        if isinstance(t0, bool) or not math.isfinite(value):
+            raise ParameterError(f"{self.source}: {what} = {t0!r} must be a finite number of seconds")
+        n_after = int(np.count_nonzero(self.t >= value - 1e-9))
+        span = float(self.t[-1]) - value
+        if n_after < MIN_SAMPLES or span < MIN_DURATION_S:
+            raise ParameterError(
+                f"{self.source}: {what} = {value:g} s leaves {n_after} sample(s) over {max(span, 0.0):.3g} s to "
+                f"compare (the record runs from {self.t[0]:g} to {self.t[-1]:g} s; at least {MIN_SAMPLES} samples "
+                f"and {MIN_DURATION_S:g} s are needed): give the time at which the ramp starts, or leave t0_s out "
+                "to take it from the record")
+        return value
 
     def _start_from_speed(self, params: Parameters) -> float:
         """Start of the ramp from the measured speed's first rise (the first sample if the record starts moving).
