@@ -196,6 +196,9 @@ def _declarations(registry) -> dict[str, ParamSpec]:
 #: all parameter declarations, by name: derived from the components of kilnctl.model (each declares its own in
 #: ``parameters``), in registration order
 SPECS: Mapping[str, ParamSpec] = RegistryView(_declarations)
+#: the section of an experiment's setup file that holds measurement options, not parameters (docs/measurements.md)
+MEASUREMENT_SECTION = "measurement"
+
 #: TOML section order
 GROUPS: tuple[str, ...] = ("motor", "controller", "drive", "kiln", "gear", "coupling", "effects")
 
@@ -583,7 +586,12 @@ class Parameters(Mapping):
 
         Keys may stand at the top level or inside any of the sections
         ``[motor]``, ``[controller]``, ``[drive]``, ``[kiln]``, ``[gear]``,
-        ``[coupling]``, ``[effects]``; missing keys keep their defaults.
+        ``[coupling]``, ``[effects]``; missing keys keep their defaults.  The
+        ``[measurement]`` section of an experiment's setup file
+        (``docs/measurements.md``) is skipped: it is read by the measurement
+        tools (:func:`kilnctl.measure.load_setup`), so one setup serves
+        ``compare`` and ``diagnose`` as well as ``params``, ``design``,
+        ``verify`` and ``simulate``.
 
         Parameters
         ----------
@@ -606,6 +614,8 @@ class Parameters(Mapping):
         raw = read_toml(path, "configuration file")
         flat: dict[str, Any] = {}
         for key, value in raw.items():
+            if key == MEASUREMENT_SECTION and isinstance(value, dict):
+                continue  # the experiment's options, not parameters: checked by kilnctl.measure.load_setup
             if isinstance(value, dict):
                 if key not in GROUPS:
                     raise ConfigFileError(

@@ -59,6 +59,24 @@ def test_flat_and_grouped_toml(tmp_path):
     assert (p.mu_c, p.mu_s) == (0.35, 0.38)
 
 
+def test_setup_file_with_measurement_section_is_a_parameter_file(tmp_path, capsys):
+    # truth: the setup written here by hand, in the form docs/measurements.md gives (gains of the experiment and
+    # the measurement tools' own section); `kilnctl params --config` is how a setup is checked before a run, and
+    # was refused with "unknown section [measurement]"
+    from kilnctl.cli import main
+
+    f = tmp_path / "setup.toml"
+    f.write_text('[controller]\ngains = "given"\nk_p = 2.0\nk_I = 5.0\nk_D = 0.01\n[kiln]\nm_v = 6e5\n'
+                 '[measurement]\nt0_s = 1.0\ncalibrate = ["mu_c", "m_v"]\n')
+    p = Parameters.from_toml(f)
+    assert (p.gains, p.k_p, p.k_I, p.k_D, p.m_v) == ("given", 2.0, 5.0, 0.01, 6e5)
+    assert main(["params", "--config", str(f), "--json"]) == 0
+    capsys.readouterr()
+    f.write_text("[measurment]\nt0_s = 1.0\n")  # a misspelt section is still refused
+    with pytest.raises(ConfigFileError, match="measurment"):
+        Parameters.from_toml(f)
+
+
 @pytest.mark.parametrize(
     "kwargs, match",
     [
