@@ -106,7 +106,7 @@ def close_matches_hint(name: str, known) -> str:
         A sentence listing up to three close matches, or all valid names when
         none is close.
     """
-    known = sorted(known)
+    known = sorted(set(known))  # callers may pass a list with a name twice (an effect that is also a component)
     close = difflib.get_close_matches(name, known, n=3, cutoff=0.5)
     if not close:
         close = [k for k in known if k.lower() == name.lower()]

@@ -305,3 +305,15 @@ def test_an_output_that_cannot_be_written_is_an_error_naming_it(tmp_path):
     with pytest.raises(ConfigFileError, match=r"plain\.txt/out\.csv: cannot write it"):
         write_atomic(tmp_path / "plain.txt" / "out.csv", "a,b\n")
     assert (tmp_path / "plain.txt").read_text() == "keep" and sorted(p.name for p in tmp_path.iterdir()) == ["plain.txt"]
+
+
+def test_an_unknown_effect_lists_each_valid_name_once(files, capsys):
+    # truth: the name typed by hand, one letter short of the catalogue's 'second_motor'; the hint listed it
+    # twice ("did you mean 'second_motor' or 'second_motor' or 'dc_motor'?"): an effect is also a component
+    code, err = _run(["compare", "--data", files["rec"], "--effects", "second_motr"], capsys)
+    _check(code, err, ["second_motr", "second_motor"])
+    assert err.count("'second_motor'") == 1, err
+    code, err = _run(["design", "--effects", "foo"], capsys)
+    _check(code, err, ["'foo'", "valid names are"])
+    names = err.split("valid names are: ")[1].strip().split(", ")
+    assert len(names) == len(set(names)), err
