@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import DesignError
+from .errors import DesignError, ParameterError
 from .params import Parameters
 
 __all__ = ["PIDGains", "GAIN_UNITS", "resolve_gains", "use_designer"]
@@ -144,7 +144,12 @@ def resolve_gains(params: Parameters) -> Parameters:
     ------
     DesignError
         When the gains are to be designed and no designer is set.
+    ParameterError
+        ``params`` is not a :class:`~kilnctl.params.Parameters` (a dict of values, a file name).
     """
+    if not isinstance(params, Parameters):
+        raise ParameterError(f"params must be a kilnctl.Parameters (Parameters(m_v=5e5), or "
+                             f"Parameters.from_toml(path) for a file), not {type(params).__name__}")
     if params.gains == "given":
         return params
     if _designer is None:

@@ -315,3 +315,9 @@ def test_fast_step_and_bandwidth_match_python_control(result):
     np.testing.assert_allclose(step_samples(sys, t), ct.step_response(sys, timepts=t).outputs, atol=1e-10)
     assert closed_loop_bandwidth(sys) == pytest.approx(ct.bandwidth(sys), rel=1e-6)
     assert result.reports["slip"].bandwidth == pytest.approx(ct.bandwidth(sys), rel=1e-6)
+
+
+def test_design_pid_given_a_dict_names_params():
+    # truth: a dict of values built by hand where the Parameters belong (was "'dict' object has no attribute 'k_po'")
+    with pytest.raises(DesignError, match=r"params must be a kilnctl.Parameters.*not dict"):
+        design_pid({"m_v": 5e5})

@@ -356,3 +356,23 @@ def test_a_failing_interval_is_said_by_its_largest_miss():
     assert d["measured_peak"] > 490.0  # the edge: what the sentence gave before
     assert "model high by" in d["text"]
     assert "by 90.0 rpm at 20.00 s (measured 410.0 rpm, model 500.0 rpm)" in d["text"]
+
+
+def test_compare_and_calibration_given_a_file_name_or_a_dict_say_what_they_need(tmp_path):
+    # truth: the wrong arguments built here by hand -- the record's file name where the record belongs, a dict of
+    # values where the Parameters belong (were AttributeErrors: "'str' object has no attribute 'experiment'")
+    from kilnctl.errors import ParameterError
+    from kilnctl.measure import read_csv
+
+    t = np.arange(0, 10, 0.02)
+    speed = np.clip(74.0 * (t - 2.0), 0.0, 500.0)
+    rec = tmp_path / "rec.csv"
+    rec.write_text("time_s,current_A,speed_rpm\n" + "".join(
+        f"{a:.2f},{100.0 + 0.5 * w + 3 * math.sin(7 * a):.3f},{w + 0.1 * math.sin(13 * a):.3f}\n"
+        for a, w in zip(t, speed)))
+    with pytest.raises(ParameterError, match=r"compare: measurement must be a kilnctl.measure.Measurement.*read_record"):
+        compare(str(rec))
+    with pytest.raises(ParameterError, match=r"Calibration.fit: measurement .*not str"):
+        Calibration(Parameters(), ["mu_c"]).fit(str(rec))
+    with pytest.raises(ParameterError, match=r"params must be a kilnctl.Parameters.*not dict"):
+        compare(read_csv(rec), {"m_v": 5e5})

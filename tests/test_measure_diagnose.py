@@ -1029,3 +1029,11 @@ def test_final_check_refits_the_others_and_removes_an_effect_they_replace(tmp_pa
     gone = next(r for r in dropped if r.effect == "second_motor")
     assert gone.delta_bic > -d.min_delta_bic and "refitted on the whole record" in gone.reason
     assert refit.bic_ < final.bic_ and "J_m2" not in refit.values_
+
+
+def test_diagnosis_given_a_file_name_says_to_read_it_first():
+    # truth: a file name typed by hand where the record belongs (was "'str' object has no attribute 'experiment'")
+    from kilnctl.errors import ParameterError
+
+    with pytest.raises(ParameterError, match=r"Diagnosis.fit: measurement must be .*read_record\('rec.csv'\)"):
+        Diagnosis(candidates=["second_motor"]).fit("rec.csv")

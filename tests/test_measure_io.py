@@ -379,3 +379,19 @@ def test_speed_in_per_cent_is_not_only_called_rad_per_s(tmp_path):
         read_csv(_write(tmp_path, _csv(t, i, w / 15.0, r / 15.0)))
     with pytest.raises(DataError, match=r"largest value 51.31 looks like rad/s.*\('speed_rpm \[rad/s\]'\)$"):
         read_csv(_write(tmp_path, _csv(t, i, w / 9.5493, r / 9.5493), "rad.csv"))
+
+
+def test_read_record_and_split_given_wrong_types_name_the_argument(tmp_path):
+    # truth: the wrong arguments built here by hand (were TypeErrors from pathlib and AttributeErrors)
+    from kilnctl.measure import read_record, split_startups
+
+    for bad in (123, None, ["rec.csv"]):
+        with pytest.raises(ParameterError, match=rf"read_record: path must be .*not {type(bad).__name__}"):
+            read_record(bad)
+    rec = tmp_path / "rec.csv"
+    rec.write_text("time_s,current_A,speed_rpm\n" + "".join(f"{0.02 * i:.2f},{10.0 + i},{1.0 * i}\n"
+                                                          for i in range(150)))
+    with pytest.raises(ParameterError, match=r"rec\.csv: params must be a kilnctl.Parameters.*not dict"):
+        read_record(rec, {"m_v": 5e5})
+    with pytest.raises(ParameterError, match=r"split_startups: log must be a kilnctl.measure.Measurement.*not str"):
+        split_startups(str(rec))

@@ -985,6 +985,7 @@ class Calibration:
         Calibration
             ``self``, fitted.
         """
+        Measurement.require(measurement, "Calibration.fit")
         params = resolve_gains(self.params)
         exp = experiment or measurement.experiment(params, t0=self.t0)
         active = measurement.t >= exp.t0 - 1e-9

@@ -471,6 +471,7 @@ def compare(measurement: Measurement, params: Parameters | None = None, model: s
         input and the other channel (99 % bands), residual spectrum, and the
         failing intervals described in words.
     """
+    Measurement.require(measurement, "compare")
     params = resolve_gains(Parameters() if params is None else params)
     exp = measurement.experiment(params, t0=t0)
     run = run_model(params, measurement, exp, model=model, effects=effects)

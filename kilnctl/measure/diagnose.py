@@ -421,6 +421,7 @@ class Diagnosis:
             often: the calling script's code is not under
             ``if __name__ == "__main__":``).
         """
+        Measurement.require(measurement, "Diagnosis.fit")
         say = progress or (lambda s: None)
         wall0 = time.perf_counter()
         self._forms = {}

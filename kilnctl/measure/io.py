@@ -22,6 +22,7 @@ It may carry one extra section, ``[measurement]``, read by this module only
 from __future__ import annotations
 
 import math
+import os
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -300,6 +301,35 @@ class Measurement:
         notes.append(f"start-up begins at t = {start:.3f} s (from the recorded speed reference)")
         return Experiment(float(start), float(rate), float(top), "recorded speed_ref_rpm", tuple(notes), jerk)
 
+    @staticmethod
+    def require(measurement, where: str, name: str = "measurement") -> "Measurement":
+        """Return ``measurement``, refused with the fix when it is not a :class:`Measurement` (a file name).
+
+        Parameters
+        ----------
+        measurement : object
+            What the caller was given.
+        where : str
+            The function or method, for the message (``compare``).
+        name : str, default 'measurement'
+            The argument's name, for the message.
+
+        Returns
+        -------
+        Measurement
+
+        Raises
+        ------
+        ParameterError
+            Naming the argument, the type given and how to read a record.
+        """
+        if not isinstance(measurement, Measurement):
+            hint = (f" (read the file first: {where}(read_record({str(measurement)!r}), ...))"
+                    if isinstance(measurement, (str, Path)) else " (from kilnctl.measure.read_record(path))")
+            raise ParameterError(f"{where}: {name} must be a kilnctl.measure.Measurement{hint}, "
+                                 f"not {type(measurement).__name__}")
+        return measurement
+
     def _checked_t0(self, t0) -> float:
         """``t0`` as a float, refused when it is not a time in the record with a record's worth of samples after it."""
         what = "t0 (the start of the start-up in record time; setup file: [measurement] t0_s)"
@@ -466,7 +496,7 @@ def read_csv(path, params: Parameters | None = None, columns=None) -> Measuremen
     """
     from .tables import read_table
 
-    return _interpret(read_table(path, "csv"), params, columns)
+    return _interpret(read_table(_record_path(path, "read_csv"), "csv"), params, columns)
 
 
 def read_record(path, params: Parameters | None = None, columns=None, *, log: bool = False) -> Measurement:
@@ -512,12 +542,24 @@ def read_record(path, params: Parameters | None = None, columns=None, *, log: bo
     """
     from .tables import read_table
 
-    return _interpret(read_table(path), params, columns, log=log)
+    return _interpret(read_table(_record_path(path, "read_record")), params, columns, log=log)
+
+
+def _record_path(path, where: str):
+    """``path`` if it names a file (str or path-like); else a ParameterError naming the argument."""
+    if isinstance(path, (str, os.PathLike)):
+        return path
+    raise ParameterError(f"{where}: path must be the record's file name (str or pathlib.Path), not "
+                         f"{type(path).__name__}")
 
 
 def _interpret(table, params, columns, *, log=False) -> Measurement:
     """Find kilnctl's channels in a RawTable, convert them to s, A, rpm, and check the record."""
     from .tables import QUANTITY, convert, parse_columns, split_unit
+
+    if params is not None and not isinstance(params, Parameters):
+        raise ParameterError(f"{table.source}: params must be a kilnctl.Parameters (the setup: "
+                             f"load_setup(path).params), not {type(params).__name__}")
 
     columns = parse_columns(columns) if not isinstance(columns, dict) else parse_columns(dict(columns))
     src, names, notes = table.source, table.names, list(table.notes)

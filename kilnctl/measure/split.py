@@ -264,6 +264,7 @@ def split_startups(log: Measurement, params: Parameters | None = None, *, by: st
     DataError
         ``by='ref'`` on a log without ``speed_ref_rpm``, a bad ``pre_s`` or ``length_s``.
     """
+    Measurement.require(log, "split_startups", "log")
     params = Parameters() if params is None else params
     if by not in ("auto", "ref", "speed"):
         raise DataError(f"by={by!r}: use 'auto', 'ref' or 'speed'")
