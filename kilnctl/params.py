@@ -26,6 +26,7 @@ Examples
 from __future__ import annotations
 
 import math
+import numbers
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -339,7 +340,8 @@ def _check_value(spec: ParamSpec, value: Any) -> float | str:
                 f"parameter {spec.name!r} = {value!r} is not allowed: choose one of "
                 + ", ".join(repr(c) for c in spec.choices))
         return value
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
+    # numbers.Real: also numpy's scalars (np.int64 from an index or a sum was refused as "must be a number")
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise ParameterError(
             f"parameter {spec.name!r} = {value!r} must be a number in {spec.unit}")
     v = float(value)
@@ -415,6 +417,11 @@ class Parameters(Mapping):
     __slots__ = ("_values", "_specs")
 
     def __init__(self, values: Mapping[str, Any] | None = None, **overrides: Any):
+        if values is not None and not isinstance(values, Mapping):
+            hint = (": for a file use Parameters.from_toml(path)" if isinstance(values, (str, os.PathLike))
+                    else ", e.g. Parameters({'m_v': 5e5}) or Parameters(m_v=5e5)")
+            raise ParameterError(f"Parameters(values): values must be a mapping of parameter names to values, not "
+                                 f"{type(values).__name__}{hint}")
         specs = SPECS.snapshot()
         merged = {name: spec.default for name, spec in specs.items()}
         given = dict(values or {})

@@ -128,3 +128,17 @@ def test_immutable_and_replace():
         p.J_m = 3
     q = p.replace(J_m=30.0)
     assert p.J_m == 21.5 and q.J_m == 30.0
+
+
+def test_numpy_numbers_are_numbers_and_a_file_name_says_from_toml():
+    # truth: values built here by hand -- np.int64(580000) is the mass 580000 kg (was refused: "must be a number");
+    # a file name given to Parameters() (was "dictionary update sequence element #0 has length 1")
+    import numpy as np
+
+    assert Parameters(m_v=np.int64(580000)).m_v == 580000.0
+    assert Parameters({"k_p": np.float32(2.0)}).k_p == 2.0
+    with pytest.raises(ParameterError, match="m_v"):
+        Parameters(m_v=np.bool_(True))
+    with pytest.raises(ParameterError, match=r"values must be a mapping.*not str.*Parameters.from_toml\(path\)"):
+        Parameters("setup.toml")
+
