@@ -23,6 +23,7 @@ __all__ = [
     "OptimizationError",
     "WorkerError",
     "close_matches_hint",
+    "name_list",
 ]
 
 
@@ -106,6 +107,7 @@ def close_matches_hint(name: str, known) -> str:
         A sentence listing up to three close matches, or all valid names when
         none is close.
     """
+    name = str(name)  # a number where a name belongs (model=1) is still "unknown", not a TypeError of difflib
     known = sorted(set(known))  # callers may pass a list with a name twice (an effect that is also a component)
     close = difflib.get_close_matches(name, known, n=3, cutoff=0.5)
     if not close:
@@ -113,3 +115,32 @@ def close_matches_hint(name: str, known) -> str:
     if close:
         return "did you mean " + " or ".join(repr(c) for c in close) + "?"
     return "valid names are: " + ", ".join(known)
+
+
+def name_list(value, what: str, error: type = ParameterError) -> tuple:
+    """Return a sequence of names as a tuple; one string is refused (it would be read letter by letter).
+
+    Parameters
+    ----------
+    value : sequence of str
+        The names the caller gave (``effects``, ``candidates``, ``calibrate`` ...).
+    what : str
+        The argument's name, for the message.
+    error : type, default ParameterError
+        Exception class raised.
+
+    Returns
+    -------
+    tuple of str
+
+    Raises
+    ------
+    ParameterError
+        ``value`` is a string (``effects="second_motor"`` read as 's', 'e', 'c' ...) or not iterable.
+    """
+    if isinstance(value, str):
+        raise error(f"{what} = {value!r} must be a list of names, not one string: write {what}=[{value!r}]")
+    try:
+        return tuple(value)
+    except TypeError:
+        raise error(f"{what} = {value!r} must be a list of names, e.g. {what}=['second_motor']") from None

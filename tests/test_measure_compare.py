@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from kilnctl import Parameters
-from kilnctl.errors import NotFittedError
+from kilnctl.errors import KilnctlError, NotFittedError
 from kilnctl.measure import Measurement
 from kilnctl.measure.calibrate import Calibration, _covariance, bic, holdout_masks
 from kilnctl.measure.compare import compare
@@ -376,3 +376,18 @@ def test_compare_and_calibration_given_a_file_name_or_a_dict_say_what_they_need(
         Calibration(Parameters(), ["mu_c"]).fit(str(rec))
     with pytest.raises(ParameterError, match=r"params must be a kilnctl.Parameters.*not dict"):
         compare(read_csv(rec), {"m_v": 5e5})
+
+
+def test_one_string_of_effects_is_named_not_read_letter_by_letter():
+    # truth: effects typed by hand as one string (was "unknown component 's'")
+    from kilnctl.errors import ModelError
+
+    with pytest.raises(ModelError, match=r"effects = 'second_motor' must be a list of names"):
+        Calibration(Parameters(), ["mu_c"], effects="second_motor")
+    with pytest.raises(KilnctlError, match=r"parameters = 'mu_c' must be a list"):
+        Calibration(Parameters(), "mu_c")
+    from kilnctl.measure import example_paths, load_setup, read_record
+
+    rec, setup = example_paths()
+    with pytest.raises(ModelError, match=r"effects = 'second_motor' must be a list of names"):
+        compare(read_record(rec), load_setup(setup).params, effects="second_motor")

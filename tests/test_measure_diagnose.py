@@ -1037,3 +1037,13 @@ def test_diagnosis_given_a_file_name_says_to_read_it_first():
 
     with pytest.raises(ParameterError, match=r"Diagnosis.fit: measurement must be .*read_record\('rec.csv'\)"):
         Diagnosis(candidates=["second_motor"]).fit("rec.csv")
+
+
+def test_diagnosis_given_one_string_of_candidates_or_calibrate_names_the_argument():
+    # truth: names typed by hand as one string (were read letter by letter: "unknown candidate effect 's'")
+    from kilnctl.errors import KilnctlError
+
+    with pytest.raises(KilnctlError, match=r"candidates = 'second_motor' must be a list of names"):
+        Diagnosis(candidates="second_motor")
+    with pytest.raises(KilnctlError, match=r"calibrate = 'mu_c' must be a list of names"):
+        Diagnosis(calibrate="mu_c")

@@ -58,3 +58,17 @@ def test_event_budget_names_the_mode_pair():
     p = Parameters(mu_c=0.005, mu_s=0.05, psi_0=0.3)
     with pytest.raises(EventStormError, match="burden"):
         simulate(p, components=("kiln", "kiln_fixed", "burden"), t_end=40.0, max_events=3)
+
+
+def test_one_string_of_effects_and_a_number_for_the_model_are_named():
+    # truth: the arguments typed here by hand; effects="second_motor" was read letter by letter ("unknown component
+    # 's'") and model=1 ended in a TypeError inside difflib
+    from kilnctl.errors import ModelError
+    from kilnctl.simulate import simulate
+
+    with pytest.raises(ModelError, match=r"effects = 'second_motor' must be a list of names.*\['second_motor'\]"):
+        simulate(None, t_end=2.0, effects="second_motor")
+    with pytest.raises(ModelError, match=r"remove = 'current_limit' must be a list"):
+        simulate(None, t_end=2.0, remove="current_limit")
+    with pytest.raises(ModelError, match=r"unknown model 1: valid names are: macro, micro"):
+        simulate(None, model=1, t_end=2.0)

@@ -26,7 +26,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..errors import KilnctlError, ModelError, NotFittedError
+from ..errors import KilnctlError, ModelError, NotFittedError, name_list
 from ..params import Parameters
 from ..simulate import resolve_gains
 from .breakaways import BreakawayTiming
@@ -858,9 +858,9 @@ class Calibration:
                  t0: float | None = None, max_nfev: int = 40, diff_step: float = 1e-3, tol: float = 1e-4,
                  time_limit_s: float | None = None, outside=None):
         self.params = Parameters() if params is None else params
-        self.parameters = tuple(parameters)
+        self.parameters = name_list(parameters, "parameters")
         self.model = model
-        self.effects = tuple(effects)
+        self.effects = name_list(effects, "effects", ModelError)
         self.bounds = dict(bounds or {})
         self.scales = scales
         self.t0 = t0

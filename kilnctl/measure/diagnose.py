@@ -45,7 +45,7 @@ from concurrent.futures.process import BrokenProcessPool
 
 import numpy as np
 
-from ..errors import KilnctlError, ModelError, NotFittedError, WorkerError, close_matches_hint
+from ..errors import KilnctlError, ModelError, NotFittedError, WorkerError, close_matches_hint, name_list
 from ..params import Parameters
 from ..simulate import resolve_gains
 from .calibrate import Calibration, Smoothing, default_starts, holdout_masks
@@ -229,8 +229,9 @@ class Diagnosis:
                  max_effects: int = 3,
                  t0: float | None = None, max_nfev: int = 60, n_local: int = 2, workers: int = 1):
         self.params = Parameters() if params is None else params
-        self.calibrate = tuple(calibrate)
+        self.calibrate = name_list(calibrate, "calibrate")
         if candidates is not None:
+            candidates = name_list(candidates, "candidates", ModelError)
             for c in candidates:
                 if c not in CATALOGUE:
                     raise ModelError(f"unknown candidate effect {c!r}: {close_matches_hint(c, CATALOGUE)}")

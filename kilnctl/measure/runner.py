@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import KilnctlError
+from ..errors import KilnctlError, ModelError, name_list
 from ..params import Parameters
 from ..simulate import DEFAULT_DT as _DT  # default simulation output step per model [s], defined there once
 from .io import Experiment, Measurement
@@ -136,6 +136,7 @@ def run_model(params: Parameters, measurement: Measurement, experiment: Experime
     if t_stop is not None:
         t_end = min(t_end, max(float(t_stop) - experiment.t0, 4 * (t[1] - t[0]) if t.size > 1 else t_end))
     dt = _DT.get(model, 1e-3) if dt is None else dt
+    effects, remove = name_list(effects, "effects", ModelError), name_list(remove, "remove", ModelError)
     initial = None
     jerk = getattr(experiment, "jerk", None)  # (an experiment built by hand may not have one)
     if jerk is not None:  # a recorded S-curve reference: the model follows it

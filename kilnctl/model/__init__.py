@@ -10,7 +10,7 @@ from __future__ import annotations
 import importlib
 import pkgutil
 
-from ..errors import ModelError, close_matches_hint
+from ..errors import ModelError, close_matches_hint, name_list
 from . import drive, drivetrain, kiln, effects  # noqa: F401  (register the components)
 from . import ramps, smooth  # noqa: F401  (reference profiles and smoothed components for optimization)
 
@@ -72,6 +72,7 @@ def component_names(model: str = "macro", add=(), remove=()) -> tuple[str, ...]:
     if model not in MODELS:
         raise ModelError(f"unknown model {model!r}: {close_matches_hint(model, MODELS)}")
     names = list(MODELS[model])
+    add, remove = name_list(add, "effects", ModelError), name_list(remove, "remove", ModelError)
     for nm in list(add) + list(remove):
         if nm not in REGISTRY:
             raise ModelError(f"unknown component {nm!r}: {close_matches_hint(nm, REGISTRY)}")
