@@ -108,6 +108,7 @@ OPTIONS = [
     ("optimize_t_max", ["optimize-ramp", "--t-max", "-3"], ["t_max"]),
     ("optimize_max_rate_zero", ["optimize-ramp", "--max-rate", "0"], ["max_rate"]),
     ("optimize_max_rate_huge", ["optimize-ramp", "--max-rate", "1e9"], ["max_rate"]),
+    ("optimize_max_rate_nan", ["optimize-ramp", "--max-rate", "nan"], ["max_rate", "rpm/s"]),  # said "seconds"
     ("optimize_plot_format", ["optimize-ramp", "--plot", "{dir}/o.xyz"], ["--plot", "xyz"]),
     ("unknown_command", ["simluate"], ["simluate"]),
     ("compare_data_missing", ["compare", "--data", "{dir}/none.csv"], ["none.csv"]),

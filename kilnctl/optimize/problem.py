@@ -291,9 +291,9 @@ def default_scenarios(params: Parameters | None = None) -> tuple[Scenario, ...]:
     return tuple(out)
 
 
-def _positive(name, v):
+def _positive(name, v, unit="seconds"):
     if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
-        raise ParameterError(f"{name} = {v!r} must be a finite number of seconds > 0")
+        raise ParameterError(f"{name} = {v!r} must be a finite number of {unit} > 0")
     return float(v)
 
 
@@ -383,7 +383,7 @@ class RampProblem:
         if self.objective not in OBJECTIVES:
             raise ParameterError(f"objective {self.objective!r} is unknown: choose one of {sorted(OBJECTIVES)}")
         if self.max_rate is not None:
-            self.max_rate = _positive("max_rate", self.max_rate)
+            self.max_rate = _positive("max_rate", self.max_rate, "rpm/s")
             if not RATE_BOUNDS[0] < self.max_rate <= RATE_BOUNDS[1]:
                 raise ParameterError(f"max_rate = {self.max_rate:g} rpm/s must lie in ({RATE_BOUNDS[0]:g}, "
                                      f"{RATE_BOUNDS[1]:g}] rpm/s")
