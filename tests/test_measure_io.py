@@ -395,3 +395,16 @@ def test_read_record_and_split_given_wrong_types_name_the_argument(tmp_path):
         read_record(rec, {"m_v": 5e5})
     with pytest.raises(ParameterError, match=r"split_startups: log must be a kilnctl.measure.Measurement.*not str"):
         split_startups(str(rec))
+
+
+@pytest.mark.parametrize("sep, said", [("|", "'|'"), ("  ", "spaces")])
+def test_a_header_separated_otherwise_says_which_separators_are_read(tmp_path, sep, said):
+    # truth: a record written here by hand with '|' or runs of spaces between its columns; the message was
+    # "missing column 'time_s' ...; the header has time_s|current_A|speed_rpm", though time_s is there
+    rows = [sep.join(("time_s", "current_A", "speed_rpm"))] + [
+        sep.join((f"{0.02 * i:.2f}", f"{10.0 + i}", f"{1.0 * i}")) for i in range(150)]
+    rec = tmp_path / "rec.csv"
+    rec.write_text("\n".join(rows) + "\n")
+    with pytest.raises(DataError, match=rf"rec\.csv: line 1 \(header\): read as one column .*separated by {said}.*"
+                                        "comma, a semicolon or a tab"):
+        read_csv(rec)

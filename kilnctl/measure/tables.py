@@ -267,6 +267,21 @@ def read_table(path, kind: str | None = None) -> RawTable:
     return {"csv": _read_text, "excel": _read_excel, "parquet": _read_parquet, "matlab": _read_mat}[kind](path)
 
 
+def _refuse_unknown_separator(path, lineno: int, header: str) -> None:
+    """Refuse a header read as one column that another separator splits into several (``|``, spaces).
+
+    A record needs at least three columns, so a one-column header is never a record; the missing-column
+    message that followed ("missing column 'time_s'; the header has time_s|current_A|speed_rpm") did not say why.
+    """
+    for sep, shown, fix in (("|", "'|'", "or write a first line 'sep=|'"), (":", "':'", "or write a first line 'sep=:'"),
+                            (None, "spaces", "")):
+        parts = [p for p in (header.split(sep) if sep else header.split()) if p.strip()]
+        if len(parts) >= 3:
+            raise DataError(f"{path}: line {lineno} (header): read as one column {header!r}: its columns look "
+                            f"separated by {shown}, but kilnctl reads columns separated by a comma, a semicolon or "
+                            f"a tab; save the file with one of those{(' ' + fix) if fix else ''}")
+
+
 #: the first line Excel writes (and reads) to name a CSV file's separator: ``sep=;``
 _SEP_LINE = re.compile(r'^"?sep=(.)"?$', re.IGNORECASE)
 _DECIMAL_COMMA = re.compile(r"^[+-]?\d+,\d*(?:[eE][+-]?\d+)?$")
@@ -311,6 +326,8 @@ def _read_text(path: Path) -> RawTable:
             names = [h.strip() for h in next(csv.reader([s], delimiter=delim))]
             while len(names) > 1 and not names[-1]:  # a trailing separator: an empty last column
                 names.pop()
+            if len(names) == 1 and not forced:
+                _refuse_unknown_separator(path, lineno, s)
             header = (lineno, names)
             continue
         row = [c.strip() for c in next(csv.reader([s], delimiter=delim))]
