@@ -310,6 +310,9 @@ def main(argv=None) -> int:
             return int(args.func(args) or 0)
         except KeyboardInterrupt as exc:
             return _interrupted(command, state, str(exc))
+        except BrokenPipeError:  # output piped into `head` and closed early (before `Exception`, which catches it too)
+            sys.stderr.close()
+            return 0
         except Exception as exc:
             # a Ctrl-C that lands in code which wraps it (an import creating a class: Python 3.11 turns an
             # exception in __set_name__ into a RuntimeError; a library turning it into its own error) is
@@ -323,9 +326,6 @@ def main(argv=None) -> int:
                 print(f"{command}: error: {exc}", file=sys.stderr)
                 return 2
             raise
-        except BrokenPipeError:  # output piped into `head` and closed early
-            sys.stderr.close()
-            return 0
 
 
 if __name__ == "__main__":  # pragma: no cover
