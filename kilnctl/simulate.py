@@ -112,6 +112,19 @@ def _check_horizon(t_end, dt):
         raise SimulationError(f"dt = {dt} s exceeds t_end = {t_end} s: choose a smaller output step")
 
 
+def _check_tolerances(**values):
+    """Refuse a tolerance or step that is not a finite number > 0 (None: the default) before the plant is built.
+
+    rtol = -1 ran and returned a result; a string ended in a TypeError of the compiled stepper; max_step = -1 was
+    reported as "the loop is probably unstable with these gains or parameters".
+    """
+    for name, v in values.items():
+        if v is None and name == "max_step":
+            continue
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
+            raise SimulationError(f"{name} = {v!r} must be a finite number > 0")
+
+
 def _initial_rows(t_end, dt) -> int:
     """Samples the recording buffers have room for at the start: the grid, :data:`RESERVED_EVENTS` mode
     switches (two samples each) and some slack, so that most runs never grow them."""
@@ -626,6 +639,9 @@ def simulate(params: Parameters | None = None, model: str = "macro", t_end: floa
         raise SimulationError(f"method = {method!r}: choose 'auto', 'ros3p' (compiled stepper) or 'cvodes'")
     if isinstance(max_events, bool) or not isinstance(max_events, int) or max_events < 1:
         raise SimulationError(f"max_events = {max_events!r} must be a positive integer")
+    _check_tolerances(rtol=rtol, atol=atol, event_tol=event_tol, max_step=max_step)
+    if isinstance(n_grid, bool) or not isinstance(n_grid, int) or n_grid < 1:
+        raise SimulationError(f"n_grid = {n_grid!r} must be a positive integer")
     _check_size(names, params, t_end, dt, max_events, max_samples, n_grid, rtol, atol)
     if "pid" in names:
         params = resolve_gains(params)

@@ -1,6 +1,7 @@
 """Bad input to the plant and the simulator gives clear errors, never a hang or a NaN."""
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -72,3 +73,13 @@ def test_one_string_of_effects_and_a_number_for_the_model_are_named():
         simulate(None, t_end=2.0, remove="current_limit")
     with pytest.raises(ModelError, match=r"unknown model 1: valid names are: macro, micro"):
         simulate(None, model=1, t_end=2.0)
+
+
+@pytest.mark.parametrize("kw, said", [({"rtol": -1.0}, "rtol = -1.0"), ({"rtol": "1e-6"}, "rtol = '1e-6'"),
+                                      ({"atol": 0.0}, "atol = 0.0"), ({"max_step": -1.0}, "max_step = -1.0"),
+                                      ({"n_grid": 0}, "n_grid = 0")])
+def test_tolerances_and_steps_that_are_not_positive_numbers_are_named(kw, said):
+    # truth: the values typed here by hand; rtol = -1 ran and returned a result, a string was a TypeError of the
+    # compiled stepper, max_step = -1 was blamed on "the loop is probably unstable with these gains"
+    with pytest.raises(SimulationError, match=rf"^{re.escape(said)} must be"):
+        simulate(None, t_end=2.0, **kw)
