@@ -358,6 +358,22 @@ def test_a_failing_interval_is_said_by_its_largest_miss():
     assert "by 90.0 rpm at 20.00 s (measured 410.0 rpm, model 500.0 rpm)" in d["text"]
 
 
+def test_a_largest_miss_on_the_other_side_of_the_mean_is_named_with_its_own_side():
+    """Red team 6's soft backlash: "model high by 4 A on average, by 300 A at 2.32 s (measured 358 A, model 58 A)"
+    where the model is 300 A *low* there.  Truth: a constructed current the model overshoots by 20 A over 2-6 s
+    except for a 0.2 s spike of +300 A the model lacks (the mean over the interval stays below zero)."""
+    from kilnctl.measure.compare import _describe
+
+    t = np.arange(0.0, 10.0, 0.02)
+    yhat = np.full(t.size, 400.0)
+    y = yhat - 20.0 * ((t >= 2.0) & (t <= 6.0)) + 320.0 * (np.abs(t - 3.0) < 0.1)
+    e = y - yhat
+    a, b = int(np.searchsorted(t, 2.0)), int(np.searchsorted(t, 6.0))
+    d = _describe(t, y, yhat, e, a, b, "A", [{"name": "ramp", "t_start": 0.0, "t_end": 10.0}])
+    assert d["mean_residual"] < 0 and d["measured_worst"] - d["model_worst"] == pytest.approx(300.0)
+    assert "model high by" in d["text"] and "but low by 300 A at " in d["text"]
+
+
 def test_compare_and_calibration_given_a_file_name_or_a_dict_say_what_they_need(tmp_path):
     # truth: the wrong arguments built here by hand -- the record's file name where the record belongs, a dict of
     # values where the Parameters belong (were AttributeErrors: "'str' object has no attribute 'experiment'")

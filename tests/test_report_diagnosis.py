@@ -225,3 +225,15 @@ def test_headline_with_nothing_selected_gives_the_final_fit():
     assert short.startswith("no catalogued effect is supported by the data; current fit 81.5 % with the calibrated "
                             "base model (its first calibration stopped at 58.4 %)")
     assert "first calibration" not in report.diagnosis_headline(diag(97.0, 97.02))
+
+
+def test_headline_with_nothing_selected_and_structure_left_does_not_say_the_record_is_explained():
+    # truth: hand-built diagnoses.  Red team 6's soft backlash (90.9 %, a local failure at 2.2-6.4 s) opened with
+    # "The model needs no catalogued effect to explain this record", then said the residual has structure
+    d = SimpleNamespace(selected_=[], baseline_={"current_A": 90.9}, final_={"current_A": 90.9}, ranking_=[None] * 8,
+                        unexplained_={"hint": "a local failure: 2.2-6.4 s (ramp)"})
+    plain = report.diagnosis_plain_headline(d)
+    assert "needs no catalogued effect" not in plain and plain.startswith("No catalogued effect explains")
+    assert "fits the current to 90.9 %" in plain and plain.endswith("a local failure: 2.2-6.4 s (ramp).")
+    d.unexplained_ = None
+    assert report.diagnosis_plain_headline(d).startswith("The model needs no catalogued effect to explain this record")
