@@ -7,6 +7,7 @@ and the value of the effect's parameter).  The full statistical version is
 
 import argparse
 import json
+import math
 from types import SimpleNamespace
 
 import pytest
@@ -338,6 +339,10 @@ def test_an_abrupt_change_outside_the_catalogue_ends_unexplained_with_its_time()
     assert d.unexplained_ is not None
     assert "abrupt change at t = 25.0 s" in d.unexplained_["text"]
     assert "+60 A" in d.unexplained_["hint"] or "+59 A" in d.unexplained_["hint"] or "+61 A" in d.unexplained_["hint"]
+    # the JSON says where it comes from; its residual verdict stays the final residual's (red team 6: "structured"
+    # true here and false under residual_signature, for the same final model)
+    assert d.unexplained_["sources"][0] == "outside_change"
+    assert d.unexplained_["structured"] == d.signature_["structured"]
     # every candidate says why it was not selected
     assert all(r.reason for r in d.ranking_)
     imitators = [r for r in d.ranking_ if "abrupt change at t = 25" in r.reason]
@@ -688,6 +693,48 @@ def test_a_current_offset_at_standstill_is_reported_and_a_clean_record_says_noth
     assert only["channel"] == "current_A"
     assert only["offset"] == pytest.approx(25.0, abs=2.0)  # 100 samples of 4 A noise: standard error 0.4 A
     assert f"{only['offset']:+.3g} A at standstill" in only["text"] and "sensor offset" in only["text"]
+
+
+def test_coloured_noise_at_standstill_is_not_an_offset_once_the_residual_shows_its_spread():
+    """Red team 6 (r3, r6): current noise of 4 A white plus 4 A AR(1) with tau = 0.4 s read as offsets of +8 and
+    +4.5 A at standstill, judged on 48 samples at rest whose own autocorrelation cannot show a 0.4 s memory.
+    Truth by construction: the same noise process at rest and in the model's residual over the record (the model
+    exact), the rest's mean set to +8 A (about 2.7 standard errors of a 1 s mean of this noise, 2.9 A by
+    the AR(1) formula), then +25 A (a sensor offset, about 9 of them)."""
+    import numpy as np
+
+    from kilnctl.measure.io import Measurement
+    from kilnctl.measure.signature import standstill_offsets, window_mean_spread
+
+    m, _ = make_record((), seed=1, t_end=40.0)
+    dt, tau = 0.02, 0.4
+    rng = np.random.default_rng(17)  # a draw whose 50 samples at rest show little of the correlation (most do)
+    n_rest = 50
+    phi = math.exp(-dt / tau)
+    ar = np.zeros(n_rest + m.t.size)
+    w = rng.normal(0.0, 4.0 * math.sqrt(1.0 - phi ** 2), ar.size)
+    for k in range(1, ar.size):
+        ar[k] = phi * ar[k - 1] + w[k]
+    noise = ar + rng.normal(0.0, 4.0, ar.size)
+    rest, resid = noise[:n_rest] - noise[:n_rest].mean(), noise[n_rest:]
+    # the standard error of a 1 s mean of this noise, from the AR(1) formula (white part: 4 / sqrt(50) A)
+    T = n_rest * dt
+    se = math.hypot(4.0 * math.sqrt(2 * tau / T - 2 * (tau / T) ** 2 * (1 - math.exp(-T / tau))), 4.0 / math.sqrt(n_rest))
+    assert 2.6 < se < 3.2
+    assert window_mean_spread(resid, n_rest - 2) == pytest.approx(se, rel=0.35)
+    t_rest = np.arange(-n_rest * dt, 0.0, dt)[:n_rest]
+    found = {}
+    for mean in (8.0, 25.0):
+        cur = np.concatenate([rest + mean, m.current + resid])
+        spd = np.concatenate([np.zeros(n_rest), m.speed])
+        ref = np.concatenate([np.zeros(n_rest), m.speed_ref])
+        rec = Measurement.from_arrays(np.concatenate([t_rest, m.t]) - t_rest[0], cur, spd, ref)
+        exp = rec.experiment(SETUP)
+        found[mean] = (standstill_offsets(rec, exp), standstill_offsets(rec, exp, residuals={"current_A": resid}))
+    assert [o["channel"] for o in found[8.0][0]] == ["current_A"]  # judged on the samples at rest alone: reported
+    assert found[8.0][1] == []
+    (only,) = found[25.0][1]
+    assert only["channel"] == "current_A" and only["offset"] == pytest.approx(25.0, abs=3.0)
 
 
 def test_a_current_logged_in_per_cent_of_its_rating_is_named_before_the_diagnosis():

@@ -218,7 +218,13 @@ class Diagnosis:
         candidate (``kind``, its values, ``delta_bic``, ``text``; see
         :meth:`_outside`), or None.
     unexplained_ : dict or None
-        Signature of what the final model still misses, or None.
+        What the record shows that the final model does not explain, or None: the final residual's signature
+        (:func:`~kilnctl.measure.signature.residual_signature`: ``text``, ``hint``, ``structured`` ...), its
+        ``text`` and ``hint`` led by what else was found, and ``sources``, which of ``"residual"`` (the
+        residual has structure), ``"outside_change"`` (a change outside the catalogue beat every candidate in the
+        search, with its values under ``outside_change``; fitted with the model of that round, so its size may
+        differ from a step left in the final residual) and ``"standstill"`` (an offset at rest,
+        :attr:`standstill_`) put it there.  ``structured`` stays the residual signature's own verdict.
     wall_s_ : float
         Run time [s].
     """
@@ -573,21 +579,24 @@ class Diagnosis:
         self.comparison_final_ = compare_run(m, final.run_, exp, model=fm, effects=tuple(selected),
                                              params=final.params_)
         self.signature_ = residual_signature(self.comparison_final_, params.n, steady_from=exp.steady_from)
-        self.unexplained_ = self.signature_ if self.signature_["structured"] else None
+        self.unexplained_ = dict(self.signature_, sources=["residual"]) if self.signature_["structured"] else None
         change = self.outside_change_
         if change is not None:
-            self.unexplained_ = dict(self.signature_, structured=True, hint=change["text"],
+            self.unexplained_ = dict(self.signature_, hint=change["text"],
+                                     sources=["outside_change"] + ["residual"] * bool(self.unexplained_),
                                      outside_change={k: v for k, v in change.items() if k != "text"},
                                      text=f"{change['text']}. The model's {self.signature_['described']}.")
         self.caveats_ = list(self.setup_cautions_) + effect_cautions(self, m, exp, params) + form_notes
-        self.standstill_ = standstill_offsets(m, exp)
+        self.standstill_ = standstill_offsets(m, exp, residuals={k: ch.residual for k, ch in
+                                                                 self.comparison_final_.channels.items()})
         if self.standstill_:
             text = "; ".join(o["text"] for o in self.standstill_)
             self.caveats_.append(text + (f": {', '.join(selected)} may stand in for it" if selected else ""))
             if self.unexplained_ is None:
-                self.unexplained_ = dict(self.signature_, structured=True, hint=text, text=text)
+                self.unexplained_ = dict(self.signature_, hint=text, text=text, sources=["standstill"])
             else:
-                self.unexplained_ = dict(self.unexplained_, text=f"{text}. {self.unexplained_['text']}")
+                self.unexplained_ = dict(self.unexplained_, text=f"{text}. {self.unexplained_['text']}",
+                                         sources=["standstill"] + self.unexplained_["sources"])
         self.measurement_ = m
         self.wall_s_ = time.perf_counter() - wall0
         say(f"final: {_fmt_fit(self.final_)} with {', '.join(selected) or 'no effect added'} "

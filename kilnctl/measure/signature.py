@@ -19,8 +19,8 @@ from .io import Measurement
 from .runner import kiln_angle
 from .stats import best_step, median_step, robust_sigma
 
-__all__ = ["residual_signature", "standstill_offsets", "fit_points", "NARROWBAND_RATIO", "EVENT_TIMING_S",
-           "MATERIAL_FIT_POINTS", "SPEED_APART_S"]
+__all__ = ["residual_signature", "standstill_offsets", "window_mean_spread", "fit_points", "NARROWBAND_RATIO",
+           "EVENT_TIMING_S", "MATERIAL_FIT_POINTS", "SPEED_APART_S", "MIN_WINDOWS"]
 
 #: a residual spectral peak this many times its neighbours is an oscillation the model misses
 NARROWBAND_RATIO = 10.0
@@ -36,9 +36,11 @@ MATERIAL_FIT_POINTS = 0.2
 #: in about a second (1.1 s to 2 % for a step, the linear loop with the example's gains), so the measured speed
 #: stays away from the model's for longer only while the drive delivers a different torque (or the load differs)
 SPEED_APART_S = 1.0
+#: fewest spans of a residual whose means give the standard error of a mean (:func:`window_mean_spread`)
+MIN_WINDOWS = 8
 
 
-def standstill_offsets(m: Measurement, exp, *, min_samples: int = 10) -> list[dict]:
+def standstill_offsets(m: Measurement, exp, *, min_samples: int = 10, residuals: dict | None = None) -> list[dict]:
     """Offsets of the current and speed signals while the drive stands still before the start-up.
 
     Before the ramp the model's current and speed are zero; a record whose samples at rest read otherwise
@@ -47,7 +49,11 @@ def standstill_offsets(m: Measurement, exp, *, min_samples: int = 10) -> list[di
     for a current offset over the rest of the record, so the user is told.  Counted: the samples before
     ``t0 - 0.05 s`` whose measured speed is below 1 % of the final reference; an offset is reported when its
     median is more than 5 standard errors (allowing for the noise's autocorrelation, see
-    :func:`variance_inflation`) and more than 0.5 % of the channel's peak from zero.
+    :func:`variance_inflation`) and more than 0.5 % of the channel's peak from zero.  A second of samples at
+    rest cannot show noise correlated over a good part of a second (red team 6: AR(1) noise of tau = 0.4 s read
+    as offsets of +8 and +4.5 A, 2 standard errors of its 1 s mean, judged as 10): given the model's
+    ``residuals``, the standard error is at least the spread of the means of as many consecutive residual samples
+    elsewhere in the record (what noise, and what the model misses, make of such a mean).
 
     Parameters
     ----------
@@ -57,6 +63,10 @@ def standstill_offsets(m: Measurement, exp, *, min_samples: int = 10) -> list[di
         Its experiment (start ``t0`` [s], ``omega_ref`` [rpm]).
     min_samples : int, default 10
         Fewer samples at rest than this: nothing is said.
+    residuals : dict, optional
+        Channel -> the model's residual over the record (measured - model) [A or rpm], e.g. a
+        :class:`~kilnctl.measure.compare.Comparison`'s; used when it holds at least :data:`MIN_WINDOWS` spans of
+        the samples at rest.
 
     Returns
     -------
@@ -73,6 +83,8 @@ def standstill_offsets(m: Measurement, exp, *, min_samples: int = 10) -> list[di
         med = float(np.median(x))
         sig = robust_sigma(x - med)
         se = sig * math.sqrt(variance_inflation(x - med) / n) if sig > 0 else 0.0
+        if residuals is not None and c in residuals:
+            se = max(se, window_mean_spread(residuals[c], n))
         peak = float(np.max(np.abs(m.channels[c])))
         if abs(med) > 5.0 * se and abs(med) > 0.005 * peak:
             out.append({"channel": c, "offset": med, "n_samples": n,
@@ -80,6 +92,34 @@ def standstill_offsets(m: Measurement, exp, *, min_samples: int = 10) -> list[di
                                  f"noise {sig:.2g} {unit}) where the model has zero: a sensor offset, or a {what} "
                                  "at rest that no catalogued effect makes")})
     return out
+
+
+def window_mean_spread(e, n: int) -> float:
+    """Spread of the means of ``n`` consecutive samples of a residual: the standard error of such a mean.
+
+    The residual is cut into spans of ``n`` samples (the last, shorter one dropped) and the robust standard
+    deviation (:func:`robust_sigma`) of their means is returned, so noise correlated over any time and what the
+    model misses slowly both count, without a model of the correlation.
+
+    Parameters
+    ----------
+    e : array_like
+        Residual, evenly sampled [any unit]; non-finite samples are left out.
+    n : int
+        Samples per mean.
+
+    Returns
+    -------
+    float
+        [unit of ``e``]; 0 when ``e`` holds fewer than :data:`MIN_WINDOWS` spans.
+    """
+    e = np.asarray(e, float)
+    e = e[np.isfinite(e)]
+    k = e.size // max(int(n), 1)
+    if k < MIN_WINDOWS:
+        return 0.0
+    means = e[: k * n].reshape(k, n).mean(axis=1)
+    return float(robust_sigma(means - np.median(means)))
 
 
 def fit_points(measured, residual, where) -> float:
