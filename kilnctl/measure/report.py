@@ -752,9 +752,8 @@ def plot_diagnosis(d, fig=None):
     -------
     matplotlib.figure.Figure
     """
-    return d.comparison_base_.plot(fig=fig, compare_with=d.comparison_final_,
-                                   labels=("calibrated base", "final: base + " + (", ".join(d.selected_) or
-                                                                                  "nothing")))
+    final = "final: base + " + ", ".join(d.selected_) if d.selected_ else "final: base, no effect added"
+    return d.comparison_base_.plot(fig=fig, compare_with=d.comparison_final_, labels=("calibrated base", final))
 
 
 def plot_ranking(d, fig=None):
