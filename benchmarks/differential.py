@@ -82,7 +82,27 @@ STRUCTURES = [
     ("macro", ("second_motor", "speed_sensor_lag"), "paper"), ("micro", ("kiln_unbalance",), "paper"),
     ("micro", ("viscous_drag", "second_motor"), "torque"), ("macro", ("drivetrain_compliance", "second_motor"),
                                                             "torque"),
+    # added 2026-11-27 (appended: the indices above and their draws are unchanged): motor Coulomb friction with
+    # Filippov sticking, the speed sensor's second-order and delay forms, and the current limit drawn low enough
+    # to act ("current_limit" is in both base models; named here, its I_max is drawn), alone and together
+    ("macro", ("motor_coulomb_friction",), "paper"), ("micro", ("motor_coulomb_friction",), "torque"),
+    ("macro", ("speed_sensor_filter",), "paper"), ("micro", ("speed_sensor_filter",), "torque"),
+    ("macro", ("speed_sensor_delay",), "torque"), ("micro", ("speed_sensor_delay",), "paper"),
+    ("macro", ("current_limit",), "paper"), ("micro", ("current_limit",), "torque"),
+    ("macro", ("motor_coulomb_friction", "current_limit"), "torque"),
+    ("micro", ("motor_coulomb_friction", "current_limit"), "paper"),
+    ("micro", ("speed_sensor_filter", "current_limit"), "torque"),
+    ("macro", ("speed_sensor_delay", "current_limit"), "paper"),
+    ("micro", ("motor_coulomb_friction", "speed_sensor_filter"), "torque"),
+    ("macro", ("motor_coulomb_friction", "speed_sensor_delay"), "torque"),
+    ("micro", ("motor_coulomb_friction", "speed_sensor_delay", "current_limit"), "torque"),
+    ("macro", ("motor_coulomb_friction", "speed_sensor_filter", "current_limit"), "torque"),
 ]
+#: the structures of the searches before 2026-11-27: what draw_points draws from by default, so that a seed
+#: gives the points it gave then
+ORIGINAL_STRUCTURES = list(range(12))
+#: the structures added on 2026-11-27 (``--structures new``)
+NEW_STRUCTURES = list(range(12, len(STRUCTURES)))
 #: a small set for the test sample (fewer structures to compile on a fresh machine)
 TEST_STRUCTURES = [0, 1, 2, 3, 4, 6]
 
@@ -137,7 +157,10 @@ def draw_points(n: int, seed: int = 0, t_end: float = 30.0, structures=None) -> 
     t_end : float
         Simulated time of each start-up [s].
     structures : sequence of int, optional
-        Indices into :data:`STRUCTURES` to draw from (default: all).
+        Indices into :data:`STRUCTURES` to draw from (default:
+        :data:`ORIGINAL_STRUCTURES`, the first 12, so a seed gives the points it
+        gave before structures were appended; the parameters of the components
+        added later are drawn only for structures that have them).
 
     Returns
     -------
@@ -147,7 +170,7 @@ def draw_points(n: int, seed: int = 0, t_end: float = 30.0, structures=None) -> 
 
     base = Parameters()
     rng = np.random.default_rng(seed)
-    idx = list(range(len(STRUCTURES))) if structures is None else list(structures)
+    idx = list(ORIGINAL_STRUCTURES) if structures is None else list(structures)
     pts = []
     for i in range(n):
         model, effects, law = STRUCTURES[idx[rng.integers(len(idx))]]
@@ -180,6 +203,23 @@ def draw_points(n: int, seed: int = 0, t_end: float = 30.0, structures=None) -> 
         if "drivetrain_compliance" in effects:
             ov["k_po"] = float(base.k_po * rng.uniform(0.2, 3.0))
             ov["C_po"] = float(base.C_po * rng.uniform(0.1, 2.0))
+        # the components added on 2026-11-27: drawn only for the structures that have them (the draws of the
+        # original structures are unchanged)
+        if "motor_coulomb_friction" in effects:
+            # up to a few hundred N*m (40 N*m is 1 % of the running torque); a tenth of the points without friction
+            # (T_cm = 0, the catalogue's null), some above what the drive gives at the first instants, so that
+            # the shaft stays stuck for a while at the start
+            r = rng.random()
+            ov["T_cm"] = 0.0 if r < 0.1 else float(rng.uniform(0.0, 400.0))
+        if "speed_sensor_filter" in effects:
+            ov["tau_s"] = float(rng.uniform(0.005, 0.15))
+            ov["zeta_s"] = float(math.exp(rng.uniform(math.log(0.3), math.log(10.0))))
+        if "speed_sensor_delay" in effects:
+            ov["T_d"] = float(rng.uniform(0.005, 0.06))
+            ov["tau_s"] = float(math.exp(rng.uniform(math.log(2e-4), math.log(0.15))))
+        if "current_limit" in effects:
+            # from 0.5 to 1.5 of the setup's 1500 A: on fast ramps (and heavy burdens) the current is held
+            ov["I_max"] = float(base.I_max * rng.uniform(0.5, 1.5))
         if rng.random() < 0.1:
             ov["m_v"] = float(base.m_v * (1 + rng.uniform(-1e-3, 1e-3)))  # near-identical neighbours
             kind = "neighbour"
@@ -389,20 +429,30 @@ def main(argv=None):
     ap.add_argument("--t-end", type=float, default=30.0)
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--out", default=str(Path(__file__).with_name("differential.json")))
+    ap.add_argument("--structures", default="original",
+                    help="structures to draw from: 'original' (the first 12, the default: a seed gives the points it "
+                         "gave before), 'new' (those added on 2026-11-27), 'all', or indices into STRUCTURES "
+                         "separated by commas")
     ap.add_argument("--rejudge", metavar="JSON", help="judge the runs of a saved search again (no simulation)")
     a = ap.parse_args(argv)
     if a.rejudge:
         verdicts = load_runs(a.rejudge)
         print(report(verdicts))
         return 0 if not any(v.problems for v in verdicts) else 1
-    pts = draw_points(a.points, a.seed, a.t_end)
+    structures = {"original": ORIGINAL_STRUCTURES, "new": NEW_STRUCTURES, "all": list(range(len(STRUCTURES)))}.get(
+        a.structures)
+    if structures is None:
+        structures = [int(k) for k in a.structures.split(",")]
+        if not all(0 <= k < len(STRUCTURES) for k in structures):
+            ap.error(f"--structures: indices run from 0 to {len(STRUCTURES) - 1}")
+    pts = draw_points(a.points, a.seed, a.t_end, structures)
     t0 = time.perf_counter()
     verdicts = search(pts, a.jobs)
     wall = time.perf_counter() - t0
     text = report(verdicts)
     print(text)
     print(f"wall {wall:.0f} s on {a.jobs} workers")
-    payload = {"seed": a.seed, "points": a.points, "t_end": a.t_end, "wall_s": wall,
+    payload = {"seed": a.seed, "points": a.points, "t_end": a.t_end, "structures": structures, "wall_s": wall,
                "tight_tolerance": TIGHT_TOLERANCE, "default_tolerance": DEFAULT_TOLERANCE, "summary": text,
                "disagreements": [{"point": asdict(v.point), "problems": v.problems} for v in verdicts if v.problems],
                "runs": [{"point": asdict(v.point), "error": v.error, "ros3p": v.ros3p, "ros3p_tight": v.ros3p_tight,
