@@ -492,20 +492,23 @@ class _Engine:
                         if "CV_" in str(exc) else "")
                 raise SimulationError(f"integrator failed at t = {t:.6g} s in mode "
                                       f"{self.plant.mode_dict(mf.mode)}{hint}: {why}") from None
-            if not np.all(np.isfinite(X)):
-                raise SimulationError(f"state became non-finite after t = {t:.6g} s in mode "
-                                      f"{self.plant.mode_dict(mf.mode)}: the parameters make the plant unstable")
-            self.check_bounded(X, X[:, -1], t, mf.mode)
             tg = np.array([t + T]) if partial else t + T * frac
             if mf.guards:
                 G = np.asarray(Gd)
                 bad = np.nonzero((G < -GUARD_EPS).any(axis=0))[0]
             else:
                 bad = ()
+            # only the samples before the first guard crossing belong to the run: the chunk goes on in a mode
+            # that no longer holds, where a state may run away (a motor friction left in slip_neg after the
+            # shaft stopped) -- the compiled stepper likewise checks only accepted steps before an event
+            k = int(bad[0]) if len(bad) else X.shape[1]
+            if not np.all(np.isfinite(X[:, :k])):
+                raise SimulationError(f"state became non-finite after t = {t:.6g} s in mode "
+                                      f"{self.plant.mode_dict(mf.mode)}: the parameters make the plant unstable")
+            self.check_bounded(X[:, :k], X[:, k - 1] if k else xs, t, mf.mode)
             if len(bad) == 0:
                 self.record(mf, tg, X)
                 return tg[-1], X[:, -1].copy(), None
-            k = int(bad[0])
             t_left = t if k == 0 else tg[k - 1]
             x_left = xs if k == 0 else X[:, k - 1]
             g_left = self.guards(mf, x_left, t_left)[0]
@@ -514,6 +517,10 @@ class _Engine:
                 te, xe = self.locate(mf, int(j), t_left, x_left, tg[k], g_left[j], G[j, k])
                 if best is None or te < best[0]:
                     best = (te, xe, int(j))
+            if not np.all(np.isfinite(best[1])):
+                raise SimulationError(f"state became non-finite after t = {t:.6g} s in mode "
+                                      f"{self.plant.mode_dict(mf.mode)}: the parameters make the plant unstable")
+            self.check_bounded(np.zeros((len(xs), 0)), best[1], best[0], mf.mode)
             self.record(mf, tg[:k], X[:, :k])
             return best[0], best[1], best
 

@@ -29,6 +29,26 @@ def test_contact_next_to_a_grid_point_is_not_missed():
     assert np.allclose([e.t for e in r.events], [e.t for e in ref.events], atol=1e-4)
 
 
+def test_cvodes_does_not_refuse_a_run_for_a_state_past_an_event():
+    # point 61 of the 2026-11-27 search (macro, 56 ms speed-sensor delay, current limit at 1432 A): the
+    # CVODES engine integrates a chunk of 2.5 s in one mode and checked every sample of it for a runaway
+    # before looking at the guards; after the burden's slip ended within the chunk, the delay's state ran
+    # away in the mode that no longer held, and the run was refused ("delay_x2 ran away ... after
+    # t = 14.065 s") while the compiled stepper ran to the end. Truth: the compiled stepper at rtol 1e-10
+    # and 1e-12 and CVODES at 1e-12 all agree with it (665 switches, final current at the 1432 A limit).
+    p = Parameters(friction_law="paper", m_v=428618.1302609749, J_v=3100619.5336113805, mu_c=0.5196547473109252,
+                   mu_s=0.553119317022571, ramp_rate=820.5699981392686, T_d=0.056014315902919325,
+                   tau_s=0.005570863647482723, I_max=1432.1625617421835)
+    eff = ["speed_sensor_delay", "current_limit"]
+    ref = simulate(p, "macro", 30.0, effects=eff, **TIGHT)
+    r = simulate(p, "macro", 30.0, effects=eff, method="ros3p", rtol=1e-10, atol=1e-11)
+    assert [(e.kind, e.component) for e in ref.events] == [(e.kind, e.component) for e in r.events]
+    assert len(ref.events) == 665
+    assert np.allclose([e.t for e in ref.events], [e.t for e in r.events], rtol=0, atol=1e-5)
+    assert ref.outputs["sigma"].max() == pytest.approx(r.outputs["sigma"].max(), rel=2e-5)
+    assert ref.outputs["i_a"][-1] == pytest.approx(1432.1625617421835, rel=1e-6)
+
+
 def _run(p):
     r = simulate(p, "micro", 12.0)
     return r.t, r.outputs["i_a"], r.outputs["sigma"], [(e.t, e.kind) for e in r.events]
