@@ -305,26 +305,25 @@ def sub_dt_pairs(A, B, dt, longest=8):
     """Indices of switch excursions in A shorter than dt with no switch of that component in B within dt:
     excursions shorter than the reference engine's guard grid.
 
-    An excursion is an even number (2 up to ``longest``) of consecutive switches of one component that
-    take some time but less than dt: into a mode and out of it, or -- a motor shaft that stops, turns
-    back, stops and turns on again within 0.6 ms -- through several modes and back.  The shortest such
-    run from each switch is taken.
+    An excursion is a run of 2 up to ``longest`` consecutive switches of one component that takes some
+    time but less than dt, with no switch of that component in B from dt before its first switch to dt
+    after its last: into a mode and out of it; or through several modes and back -- a current that
+    touches its lower limit for 0.65 ms (free -> lower, then lower -> slide_lower -> free at one instant),
+    a motor shaft that stops, turns back, stops and turns on again within 0.6 ms.  The longest such run
+    from each switch is taken.
     """
     drop = []
     i = 0
     while i + 1 < len(A):
         t0, _, c0, _ = A[i]
         hit = 0
-        for m in range(2, longest + 1, 2):
-            if i + m > len(A) or any(A[i + q][2] != c0 for q in range(m)):
+        for m in range(2, longest + 1):
+            if i + m > len(A) or A[i + m - 1][2] != c0 or A[i + m - 1][0] - t0 >= dt:
                 break
-            span = A[i + m - 1][0] - t0
-            if span >= dt:
-                break
+            t_last = A[i + m - 1][0]
             # an excursion takes time (a zero-time cascade, e.g. a release handed on to free running, is not one)
-            if span > 1e-9 and not any(cb == c0 and abs(tb - t0) < dt for tb, _, cb, _ in B):
+            if t_last - t0 > 1e-9 and not any(cb == c0 and t0 - dt < tb < t_last + dt for tb, _, cb, _ in B):
                 hit = m
-                break
         if hit:
             drop += list(range(i, i + hit))
             i += hit
