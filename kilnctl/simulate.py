@@ -593,6 +593,12 @@ def simulate(params: Parameters | None = None, model: str = "macro", t_end: floa
         per cycle, and a current read at a fixed instant inherits that drift);
         use rtol=1e-10 for event timing, where the two engines agree within
         1e-5 and 1e-5 s (``benchmarks/differential.py``, docs/benchmarks.md).
+        Not on a speed loop that hunts (a speed-sensor delay from about
+        15 ms with the designed gains, hundreds of current-limit hits): there
+        the error grows cycle by cycle, a final current read inside a limit
+        cycle was 1-8 % off and one peak stress 1.4 % low at the defaults,
+        and where the hunting with mesh impacts is chaotic no tolerance gives
+        a reproducible peak (the two engines part after 2-5 s even at 1e-12).
     event_tol : float, default 1e-9
         Width [s] to which a mode switch is located.
     max_events : int, default 5000
