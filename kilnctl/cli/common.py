@@ -319,6 +319,24 @@ def load_experiment_setup(args):
     return setup
 
 
+def print_diagnosis_cautions(args) -> None:
+    """Print what the diagnosis behind ``--model-from`` said to read before acting on its model (nothing
+    without ``--model-from``, or when it said nothing of the kind); see
+    :func:`kilnctl.design.learned.diagnosis_cautions`."""
+    if not getattr(args, "model_from", None):
+        return
+    import textwrap
+
+    from ..design.learned import diagnosis_cautions
+
+    said = diagnosis_cautions(args.model_from)
+    if not said:
+        return
+    print(f"\nRead what the diagnosis that learned this model ({args.model_from}) said before acting on it:")
+    for text in said:
+        print(textwrap.fill(text, 110, initial_indent="  - ", subsequent_indent="    "))
+
+
 def learned_structure_args(args, params: Parameters, model: str | None):
     """The structure ``--model-from DIAGNOSE.json`` and ``--effects A,B`` describe, with the gains of ``params``.
 

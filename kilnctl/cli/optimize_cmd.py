@@ -17,7 +17,7 @@ import sys
 
 from . import print_json
 from .common import (Command, add_config_arg, add_options, check_folder_can_be_made, check_output_files,
-                     learned_structure_args, load_params)
+                     learned_structure_args, load_params, print_diagnosis_cautions)
 
 #: exit code of a result that the hybrid verification flagged
 EXIT_FLAGGED = 3
@@ -111,6 +111,7 @@ class OptimizeRampCommand(Command):
             print(result.table())
             if price is not None:
                 print(price.table())
+            print_diagnosis_cautions(args)
             if args.plot:
                 print(f"  wrote plot  {args.plot}")
             if args.report:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from . import print_json
 from .common import (Command, add_config_arg, add_options, check_folder_can_be_made, check_output_files,
-                     learned_structure_args, load_params)
+                     learned_structure_args, load_params, print_diagnosis_cautions)
 
 
 class VerifyCommand(Command):
@@ -57,6 +57,7 @@ class VerifyCommand(Command):
                 print(f"nonlinear plant: the {args.model} model with {', '.join(added) or 'nothing added'}"
                       + (f" and the calibrated values of {args.model_from}" if args.model_from else ""))
             print(v)
+            print_diagnosis_cautions(args)
             if args.report:
                 print(f"wrote {args.report}/verify.html, verify.json, verify.png")
         return 0

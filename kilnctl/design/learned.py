@@ -29,7 +29,7 @@ from ..params import Parameters
 from ..structure import Structure, diagnosis_dict
 from .requirements import Requirements
 
-__all__ = ["LoopCheck", "check_gains", "retune", "Retuned", "learned_structure", "gain_change"]
+__all__ = ["LoopCheck", "check_gains", "retune", "Retuned", "learned_structure", "diagnosis_cautions", "gain_change"]
 
 #: a damping this close below the requirement still meets it (the root-locus design places poles on the limit)
 ZETA_TOL = 5e-4
@@ -507,3 +507,35 @@ def learned_structure(path, model: str | None = None, base: Parameters | None = 
     base = Parameters() if base is None else base
     params = base.replace(**values) if values else base
     return structure, structure.apply(params), list(structure.effects)
+
+
+def diagnosis_cautions(path) -> list[str]:
+    """What the diagnosis behind a learned structure said to read before acting on it.
+
+    A model learned from a record is only as good as the diagnosis says: its cautions (an effect's value far
+    outside its usual range, a rival that fits as well, weak evidence under coloured noise) and what it left
+    unexplained go with the model to every command that uses it (``design``, ``verify``, ``optimize-ramp``
+    ``--model-from``).
+
+    Parameters
+    ----------
+    path : path-like, dict or Diagnosis
+        As for :func:`learned_structure`.
+
+    Returns
+    -------
+    list of str
+        The diagnosis' cautions, then ``"unexplained: ..."`` when it left structure unexplained; empty when it
+        said nothing of the kind.
+
+    Raises
+    ------
+    ConfigFileError
+        The file is missing, not JSON, or not a diagnosis.
+    """
+    d = diagnosis_dict(path)
+    out = [str(c) for c in d.get("caveats") or []]
+    unexplained = d.get("unexplained")
+    if isinstance(unexplained, dict) and unexplained.get("hint"):
+        out.append(f"unexplained: {unexplained['hint']}")
+    return out
