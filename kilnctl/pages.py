@@ -50,7 +50,7 @@ def verify_headline(v) -> str:
             "linear design, which carries no load torque.")
 
 
-def verify_html(v, fig=None) -> str:
+def verify_html(v, fig=None, cautions=()) -> str:
     """Return the verification as one self-contained HTML page.
 
     Parameters
@@ -59,6 +59,9 @@ def verify_html(v, fig=None) -> str:
         The verification.
     fig : matplotlib.figure.Figure or bytes, optional
         Its figure, already drawn (or its PNG content).
+    cautions : sequence of str
+        What the diagnosis behind a learned plant said to read before acting on it
+        (:func:`kilnctl.design.learned.diagnosis_cautions`), shown at the top.
 
     Returns
     -------
@@ -77,12 +80,13 @@ def verify_html(v, fig=None) -> str:
              "<h2>Speed and current</h2>" + figure_block(fig, "speed and current, linear and nonlinear")]
     return report_page(
         "Speed-loop design verified on the nonlinear plant", verify_headline(v), parts, terms=("linear",),
+        warnings=[("Diagnosis caution", c) for c in cautions],
         settings={"k_p [V/rpm]": f"{g.k_p:.4g}", "k_I [V/(rpm·s)]": f"{g.k_I:.4g}", "k_D [V·s/rpm]": f"{g.k_D:.4g}",
                   "model": v.nonlinear.model, "ramp [rpm/s]": g.ramp_rate, "set point [rpm]": g.omega_ref,
                   "simulated [s]": float(v.nonlinear.t[-1])})
 
 
-def write_verify_report(v, folder, protect=()) -> list:
+def write_verify_report(v, folder, protect=(), cautions=()) -> list:
     """Write ``verify.html``, ``verify.json`` and ``verify.png`` into a folder.
 
     Parameters
@@ -93,16 +97,19 @@ def write_verify_report(v, folder, protect=()) -> list:
         Destination folder (created).
     protect : sequence of path-like
         Input files never to overwrite.
+    cautions : sequence of str
+        What the diagnosis behind a learned plant said (see :func:`verify_html`).
 
     Returns
     -------
     list of Path
     """
     png = png_bytes(v.plot())  # rendered once: the page's image and the file are the same bytes
-    return write_page_files(folder, "verify", verify_html(v, png), v.to_dict(), {"verify.png": png}, protect)
+    return write_page_files(folder, "verify", verify_html(v, png, cautions), v.to_dict(), {"verify.png": png},
+                            protect)
 
 
-def ramp_html(result, fig=None) -> str:
+def ramp_html(result, fig=None, cautions=()) -> str:
     """Return a ramp optimization as one self-contained HTML page.
 
     Parameters
@@ -111,6 +118,9 @@ def ramp_html(result, fig=None) -> str:
         The optimization (:func:`kilnctl.optimize.optimize_ramp`).
     fig : matplotlib.figure.Figure or bytes, optional
         Its figure, already drawn (or its PNG content).
+    cautions : sequence of str
+        What the diagnosis behind a learned plant said to read before acting on it
+        (:func:`kilnctl.design.learned.diagnosis_cautions`), shown at the top.
 
     Returns
     -------
@@ -146,7 +156,8 @@ def ramp_html(result, fig=None) -> str:
     parts.append("<h2>Reference, stress and current</h2>"
                  + figure_block(fig, "ramp, stress and current against the baseline"))
     return report_page(
-        "Start-up ramp optimization", head, parts, warnings=[("Flag", f) for f in result.flags],
+        "Start-up ramp optimization", head, parts,
+        warnings=[("Flag", f) for f in result.flags] + [("Diagnosis caution", c) for c in cautions],
         terms=("objective", "ramp"), notes=result.notes,
         settings={"profile": s["profile"], "objective": s["objective"], "t_max [s]": prob.t_max,
                   "horizon [s]": prob.horizon, "robust": "yes" if prob.robust else "no (nominal parameters)",
@@ -157,7 +168,7 @@ def ramp_html(result, fig=None) -> str:
                   "horizon [s]": "simulated start-up"})
 
 
-def write_ramp_report(result, folder, protect=()) -> list:
+def write_ramp_report(result, folder, protect=(), cautions=()) -> list:
     """Write ``optimize_ramp.html``, ``optimize_ramp.json`` and ``optimize_ramp.png`` into a folder.
 
     Parameters
@@ -168,6 +179,8 @@ def write_ramp_report(result, folder, protect=()) -> list:
         Destination folder (created).
     protect : sequence of path-like
         Input files never to overwrite.
+    cautions : sequence of str
+        What the diagnosis behind a learned plant said (see :func:`ramp_html`).
 
     Returns
     -------
@@ -176,5 +189,5 @@ def write_ramp_report(result, folder, protect=()) -> list:
     from matplotlib.figure import Figure
 
     png = png_bytes(result.plot(fig=Figure(figsize=(10, 8.5))))
-    return write_page_files(folder, "optimize_ramp", ramp_html(result, png), result.summary(),
+    return write_page_files(folder, "optimize_ramp", ramp_html(result, png, cautions), result.summary(),
                             {"optimize_ramp.png": png}, protect)

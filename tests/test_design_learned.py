@@ -165,3 +165,15 @@ def test_a_learned_model_comes_with_what_its_diagnosis_said(tmp_path, capsys, co
         assert main(["design", "--model-from", str(path), "--json"]) == 0
         cautions = json.loads(capsys.readouterr().out)["learned"]["diagnosis_cautions"]
         assert cautions == said["caveats"] + ["unexplained: a local failure: 2.2-6.4 s (ramp)"]
+
+
+def test_the_verify_page_of_a_learned_model_shows_what_its_diagnosis_said(tmp_path, capsys):
+    # truth: the hand-written diagnosis of the test above; its caution reaches the --report page too
+    said = {"selected": [], "final_parameters": {}, "settings": {"model": "macro"},
+            "caveats": ["motor_coulomb_friction: T_cm = 244 N*m, above the usual 10-100 N*m"], "unexplained": None}
+    path = tmp_path / "diagnose.json"
+    path.write_text(json.dumps(said))
+    report = tmp_path / "report"
+    assert main(["verify", "--t-end", "10", "--model-from", str(path), "--report", str(report)]) == 0
+    page = (report / "verify.html").read_text()
+    assert "Diagnosis caution:" in page and "T_cm = 244 N*m, above the usual 10-100 N*m" in page

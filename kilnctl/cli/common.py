@@ -319,17 +319,23 @@ def load_experiment_setup(args):
     return setup
 
 
+def learned_cautions(args) -> list[str]:
+    """What the diagnosis behind ``--model-from`` said to read before acting on its model (empty without it);
+    see :func:`kilnctl.design.learned.diagnosis_cautions`."""
+    if not getattr(args, "model_from", None):
+        return []
+    from ..design.learned import diagnosis_cautions
+
+    return diagnosis_cautions(args.model_from)
+
+
 def print_diagnosis_cautions(args) -> None:
     """Print what the diagnosis behind ``--model-from`` said to read before acting on its model (nothing
     without ``--model-from``, or when it said nothing of the kind); see
     :func:`kilnctl.design.learned.diagnosis_cautions`."""
-    if not getattr(args, "model_from", None):
-        return
     import textwrap
 
-    from ..design.learned import diagnosis_cautions
-
-    said = diagnosis_cautions(args.model_from)
+    said = learned_cautions(args)
     if not said:
         return
     print(f"\nRead what the diagnosis that learned this model ({args.model_from}) said before acting on it:")

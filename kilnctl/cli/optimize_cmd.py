@@ -17,7 +17,8 @@ import sys
 
 from . import print_json
 from .common import (Command, add_config_arg, add_options, check_folder_can_be_made, check_output_files,
-                     learned_structure_args, load_params, print_diagnosis_cautions)
+                     learned_cautions, learned_structure_args, load_params,
+                     print_diagnosis_cautions)
 
 #: exit code of a result that the hybrid verification flagged
 EXIT_FLAGGED = 3
@@ -100,7 +101,7 @@ class OptimizeRampCommand(Command):
         if args.report:
             from ..pages import write_ramp_report
 
-            write_ramp_report(result, args.report, protect=(args.config,))
+            write_ramp_report(result, args.report, protect=(args.config,), cautions=learned_cautions(args))
         if args.json:
             out = result.summary()
             if price is not None:

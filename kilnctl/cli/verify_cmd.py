@@ -4,7 +4,8 @@ from __future__ import annotations
 
 from . import print_json
 from .common import (Command, add_config_arg, add_options, check_folder_can_be_made, check_output_files,
-                     learned_structure_args, load_params, print_diagnosis_cautions)
+                     learned_cautions, learned_structure_args, load_params,
+                     print_diagnosis_cautions)
 
 
 class VerifyCommand(Command):
@@ -44,7 +45,7 @@ class VerifyCommand(Command):
         if args.report:
             from ..pages import write_verify_report
 
-            write_verify_report(v, args.report, protect=(args.config,))
+            write_verify_report(v, args.report, protect=(args.config,), cautions=learned_cautions(args))
         if args.json:
             print_json(v.to_dict())
         else:
