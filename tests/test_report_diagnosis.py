@@ -237,3 +237,20 @@ def test_headline_with_nothing_selected_and_structure_left_does_not_say_the_reco
     assert "fits the current to 90.9 %" in plain and plain.endswith("a local failure: 2.2-6.4 s (ramp).")
     d.unexplained_ = None
     assert report.diagnosis_plain_headline(d).startswith("The model needs no catalogued effect to explain this record")
+
+
+def test_a_round_of_pairs_is_reported_with_both_effects_parameters():
+    # red team 7: a record whose current falls like stick-slip had the torque friction law refitted together with
+    # each other candidate; writing the report then failed (KeyError: 'torque_friction_law+current_limit') and
+    # left no HTML, JSON or summary.  Truth: the hand-built diagnosis with such a round added
+    d = hand_built()
+    pair = _cand("torque_friction_law+second_motor", -412.0, -96.0, 8.1, True,
+                 "together with torque_friction_law (refitted as a pair): BIC and held-out fit both improve",
+                 {"J_m2": (19.8, "kg*m^2")})
+    d.rounds_ = d.rounds_ + [[pair]]
+    figs = {"s": report.plot_ranking(d), "r": report.plot_ranking(d)}
+    text = html.unescape(report.diagnosis_html(d, figs))
+    assert "torque_friction_law+second_motor" in text and "<td>-412.0</td><td>-96.0</td>" in text
+    assert "J_m2" in text[text.index("torque_friction_law+second_motor"):]
+    assert "torque_friction_law+second_motor" in report.diagnosis_summary(d)
+    json.dumps(report.diagnosis_dict(d))

@@ -358,8 +358,10 @@ def _jsonable(d):
 
 
 def _effect_params(effect) -> tuple[str, ...]:
-    """The parameters an effect brings (each with its partner), in catalogue order."""
-    return tuple(dict.fromkeys(k for fp in CATALOGUE[effect].parameters for k in (fp.name, fp.partner) if k))
+    """The parameters an effect brings (each with its partner), in catalogue order; for two effects refitted as
+    a pair in the round of pairs (``torque_friction_law+second_motor``), both effects' parameters."""
+    return tuple(dict.fromkeys(k for part in effect.split("+") for fp in CATALOGUE[part].parameters
+                               for k in (fp.name, fp.partner) if k))
 
 
 def _form_params_of(effect, name) -> tuple[str, ...]:
