@@ -292,6 +292,16 @@ def test_a_one_sample_spike_within_the_limits_is_noted_and_an_impact_is_not():
     assert "3000 A" in note and "glitch" in note
     impacts, _ = make(find("pair:torque_friction_law+backlash/s2"))
     assert not [n for n in impacts.notes if "spike" in n]
+    # red team 7: a current clipped at an ADC's range (there 95 % of its peak) made ordinary samples beside the
+    # clipped runs "spikes of 6544383 noise standard deviations"; a real glitch in the clipped record still is one
+    m, _ = make_record((), seed=1, t_end=40.0)
+    level = np.percentile(m.current[m.t > 12.0], 15.0)  # in the noise at the set speed: most samples clipped
+    clipped = np.minimum(m.current, level)
+    assert np.mean(np.diff(clipped, 2) == 0.0) > 0.5  # most second differences exactly zero
+    assert not [n for n in Measurement.from_arrays(m.t, clipped, m.speed, m.speed_ref).notes if "spike" in n]
+    clipped[400] = 3000.0
+    (note,) = [n for n in Measurement.from_arrays(m.t, clipped, m.speed, m.speed_ref).notes if "spike" in n]
+    assert "3000 A" in note
 
 
 def test_a_logger_that_held_its_last_values_is_noted_and_quantised_or_resting_signals_are_not():

@@ -1026,7 +1026,8 @@ def _spike_notes(arrays, lines, row_word, labels) -> list[str]:
     """Say where a channel holds isolated one-sample spikes (a logger's glitch within the unit limits).
 
     A sample is one when it lies more than :data:`SPIKE_SIGMAS` noise standard deviations (from the second
-    differences' median absolute value: white noise of sigma gives second differences of sigma sqrt(6)) from
+    differences' median absolute value, those of exactly zero left out: white noise of sigma gives second
+    differences of sigma sqrt(6)) from
     the median of its two neighbours on either side, and more than five times their own spread from it: a
     backlash impact's ringing or a breakaway's fall moves the neighbours too (none of the hard set's 61 records
     at 50 Hz has one; at 10 Hz a backlash impact can be a single sample, hence the note's question).  One
@@ -1039,7 +1040,13 @@ def _spike_notes(arrays, lines, row_word, labels) -> list[str]:
             continue
         nb = np.stack([a[:-4], a[1:-3], a[3:-1], a[4:]])
         dev = a[2:-2] - np.median(nb, axis=0)
-        sigma = max(robust_sigma(np.diff(a, 2)) / math.sqrt(6.0), 1e-9 * (float(np.ptp(a)) or 1.0))
+        d2 = np.diff(a, 2)
+        # samples that repeat exactly (a current clipped at its ADC range, values held or quantised by a historian)
+        # make second differences of exactly zero, which say nothing of the noise: judged on them, ordinary
+        # samples next to a clipped run read as spikes of millions of standard deviations (red team 7)
+        moving = d2[d2 != 0.0]
+        sigma = max(robust_sigma(moving if moving.size >= 10 else d2) / math.sqrt(6.0),
+                    1e-9 * (float(np.ptp(a)) or 1.0))
         bad = np.flatnonzero((np.abs(dev) > SPIKE_SIGMAS * sigma) & (np.abs(dev) > 5.0 * np.ptp(nb, axis=0)))
         if bad.size == 0:
             continue
