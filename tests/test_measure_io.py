@@ -233,6 +233,15 @@ def test_record_that_starts_with_the_motor_running_is_refused(tmp_path):
                                         r"omega_ref = 500 rpm\).*kilnctl split-startups"):
         read_csv(_write(tmp_path, _csv(t[late], i[late], w[late], r[late])))
     assert read_csv(_write(tmp_path, _csv(t, i, w, r), "whole.csv")).n == 400
+    # red team 7: a logger triggered 0.5 s into the 74 rpm/s ramp (7 % of the set speed there) was read, and the
+    # diagnosis took the missing start for a viscous drag; here 40 rpm over the first 0.1 s, 8 %, under the 10 %
+    # that was refused before; a speed sensor's offset of 5 rpm at rest is read, and a record at 5 Hz that starts
+    # with the ramp too (the median of its first five samples, 0.8 s, is 30 rpm: 6 %)
+    with pytest.raises(DataError, match=r"starts with the motor running \(\d+\.\d+ rpm over its first samples, 8 %"):
+        read_csv(_write(tmp_path, _csv(t[10:], i[10:], w[10:], r[10:]), "late.csv"))
+    assert read_csv(_write(tmp_path, _csv(t, i, w + 5.0, r), "offset.csv")).n == 400
+    t5, i5, w5, r5 = _rows(n=60, dt=0.2)
+    assert read_csv(_write(tmp_path, _csv(t5, i5, w5 + 1.0, r5), "five_hz.csv")).n == 60
 
 
 def test_current_in_ma_and_speed_in_drive_units_are_refused(tmp_path):
