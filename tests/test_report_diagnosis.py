@@ -254,3 +254,14 @@ def test_a_round_of_pairs_is_reported_with_both_effects_parameters():
     assert "J_m2" in text[text.index("torque_friction_law+second_motor"):]
     assert "torque_friction_law+second_motor" in report.diagnosis_summary(d)
     json.dumps(report.diagnosis_dict(d))
+
+
+def test_how_the_record_was_read_is_in_the_report_files():
+    # red team 7: the reader's notes (a speed converted from kiln rpm, samples missing) were printed on the
+    # terminal only, not in diagnose.html or diagnose.json.  Truth: the notes put into the hand-built diagnosis
+    d = hand_built()
+    d.measurement_ = SimpleNamespace(source="rec.csv", notes=("speed_rpm converted from kiln rpm (x 1076.5)",))
+    assert report.diagnosis_dict(d)["record_notes"] == ["speed_rpm converted from kiln rpm (x 1076.5)"]
+    figs = {"s": report.plot_ranking(d), "r": report.plot_ranking(d)}
+    text = html.unescape(report.diagnosis_html(d, figs))
+    assert "Note: record: speed_rpm converted from kiln rpm (x 1076.5)" in text

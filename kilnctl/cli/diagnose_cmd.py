@@ -79,9 +79,7 @@ class DiagnoseCommand(Command):
         d.fit(data, progress=progress)
         written = d.report(args.report, protect=(args.data, args.config)) if args.report else []
         if args.json:
-            out = d.to_dict()
-            out["record_notes"] = list(data.notes)  # how the file was read: units converted, columns ignored
-            print_json(out)
+            print_json(d.to_dict())  # with record_notes: how the file was read
             return 0
         print(d.summary())
         for note in data.notes:

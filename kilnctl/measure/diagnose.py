@@ -1423,7 +1423,9 @@ class Diagnosis:
         Returns
         -------
         dict
-            ``baseline`` (fit % per channel), ``ranking`` (first round, per
+            ``source`` and ``record_notes`` (how the record was read: units
+            converted, columns ignored, samples missing, spikes), ``baseline``
+            (fit % per channel), ``ranking`` (first round, per
             candidate: ``effect``, ``delta_bic``, ``fit_percent``,
             ``parameters`` with standard errors, ``on_bound`` ...),
             ``rounds`` (every round), ``selected``, ``final`` (fit % per

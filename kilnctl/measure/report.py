@@ -620,6 +620,9 @@ def diagnosis_dict(d) -> dict:
     fc = d.final_calibration_
     return {
         "source": d.measurement_.source,
+        # how the file was read (units converted, columns ignored, samples missing, spikes): with the report files,
+        # not only on the terminal
+        "record_notes": list(getattr(d.measurement_, "notes", ())),
         "baseline": {k: json_number(v) for k, v in d.baseline_.items()},
         "baseline_parameters": _params_dict(d.base_calibration_),
         "oscillation": oscillation_dict(getattr(d, "oscillation_", None)),
@@ -1210,7 +1213,8 @@ def diagnosis_html(d, figs=None) -> str:
                        warnings=warnings, terms=("fit", "dbic", "heldout", "cautions", "uncertainty", "sigma"),
                        values={"min_delta_bic": d.min_delta_bic, "min_holdout_gain": d.min_holdout_gain,
                                "holdout_z": d.holdout_z},
-                       notes=d.experiment_.notes, settings=diagnosis_dict(d)["settings"],
+                       notes=[f"record: {n}" for n in getattr(d.measurement_, "notes", ())]
+                       + list(d.experiment_.notes), settings=diagnosis_dict(d)["settings"],
                        meanings=_DIAGNOSIS_SETTINGS)
 
 
