@@ -427,3 +427,23 @@ def test_a_header_separated_otherwise_says_which_separators_are_read(tmp_path, s
     with pytest.raises(DataError, match=rf"rec\.csv: line 1 \(header\): read as one column .*separated by {said}.*"
                                         "comma, a semicolon or a tab"):
         read_csv(rec)
+
+
+def test_a_record_resampled_from_a_coarser_logger_is_named():
+    """Red team 7: a 50 Hz record exported at 200 Hz by linear interpolation selected an unbalance and a second
+    motor the plant does not have, and its speed was said to "look like the speed reference".  Truth by
+    construction: a start-up of kilnctl's generator at 50 Hz (noise on every sample), the same interpolated and
+    held onto a grid four times finer, and the same with its current on 10 A steps (not resampled)."""
+    from kilnctl.measure.io import resampled_every
+    from kilnctl.measure.synthetic import make_record
+
+    m, _ = make_record((), seed=1, t_end=40.0)
+    fine = np.linspace(m.t[0], m.t[-1], 4 * (m.t.size - 1) + 1)
+    held = np.minimum(np.searchsorted(m.t, fine, "right") - 1, m.t.size - 1)
+    for cur, spd in ((np.interp(fine, m.t, m.current), np.interp(fine, m.t, m.speed)), (m.current[held], m.speed[held])):
+        r = Measurement.from_arrays(fine, cur, spd, np.interp(fine, m.t, m.speed_ref))
+        (note,) = [n for n in r.notes if "resampled" in n]
+        assert "samples 4 apart" in note and "about 50 Hz onto 200 Hz" in note
+        assert not any("noise-free" in n for n in r.notes)
+    assert resampled_every(m.current) is None and resampled_every(np.round(m.current / 10.0) * 10.0) is None
+    assert not any("resampled" in n for n in m.notes)

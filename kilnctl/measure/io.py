@@ -814,7 +814,10 @@ def _speed_column_notes(arrays, parsed, names, found, kept, columns) -> list[str
     if v.size > 20 and moving.sum() > 10:
         top = float(np.max(np.abs(v))) or 1.0
         dt = float(np.median(np.diff(t)))
-        if np.isfinite(change).all() and np.median(change) * dt < 1e-6 * top:
+        # a record resampled from a coarser logger is straight between its samples too: that is said apart
+        # (red team 7: an interpolated 200 Hz export read as "looks like the speed reference")
+        if np.isfinite(change).all() and np.median(change) * dt < 1e-6 * top \
+                and resampled_every(arrays.get("current_A")) is None:
             out.append(f"speed_rpm ({names[j_speed]!r}) rises as a noise-free straight ramp: it looks like the speed "
                        "reference, not the measured motor speed; map the measured speed with --columns "
                        "speed_rpm=NAME")
@@ -995,7 +998,8 @@ def _checked(arrays, lines, source, params, notes, row_word, labels=None, log=Fa
     _check_units(arrays, lines, source, params, row_word, labels, log)
     if not log:
         notes = tuple(notes) + tuple(_sampling_notes(t, dts, med, lines, row_word)) \
-            + tuple(_spike_notes(arrays, lines, row_word, labels)) + tuple(_frozen_notes(t, arrays, lines, row_word))
+            + tuple(_spike_notes(arrays, lines, row_word, labels)) + tuple(_frozen_notes(t, arrays, lines, row_word)) \
+            + tuple(_resampled_notes(t, arrays, med))
     return Measurement(t=t, channels=arrays, source=source, lines=lines, notes=tuple(notes), row_word=row_word)
 
 
@@ -1086,6 +1090,55 @@ def _frozen_notes(t, arrays, lines, row_word) -> list[str]:
                        f"{t[b] - t[a]:.2f} s while the drive turns: a logger that held its last values? They are "
                        "not measurements, but they are compared as they are: cut them out if they are")
     return out
+
+
+def resampled_every(current) -> int | None:
+    """Every how many samples the logged current bends, when it is straight (or flat) in between: a record
+    resampled from a coarser logger onto a finer grid, by linear interpolation or by holding values.
+
+    A measured current has noise on every sample, so its differences are never zero to rounding; one
+    interpolated k-fold is straight over k - 1 of every k samples, its bends all in one place modulo k (one
+    held k-fold changes only there).  Judged: the bends (second differences above 1e-6 of the channel's peak,
+    rounding below), or else the changes (first differences), in one residue modulo k for at least 90 % of
+    them, k at most :data:`RESAMPLED_MAX` = 10.
+
+    Parameters
+    ----------
+    current : ndarray
+        The logged current [A], on an even grid.
+
+    Returns
+    -------
+    int or None
+        k (2 to 10), or None when the current is not resampled so.
+    """
+    a = np.asarray(current, float)
+    if a.size < 50:
+        return None
+    tiny = 1e-6 * (float(np.max(np.abs(a))) or 1.0)
+    for order in (2, 1):  # bends of a line interpolated, steps of values held
+        bends = np.flatnonzero(np.abs(np.diff(a, order)) > tiny)
+        if bends.size < 10 or bends.size > 0.6 * (a.size - order):
+            continue
+        for k in range(RESAMPLED_MAX, 1, -1):  # the largest: bends every 4th sample are every 2nd one's too
+            if np.max(np.bincount(bends % k, minlength=k)) >= 0.9 * bends.size:
+                return k
+    return None
+
+
+#: largest factor of resampling :func:`resampled_every` names
+RESAMPLED_MAX = 10
+
+
+def _resampled_notes(t, arrays, med) -> list[str]:
+    """Say when the current was resampled from a coarser logger (:func:`resampled_every`)."""
+    k = resampled_every(arrays.get("current_A"))
+    if k is None:
+        return []
+    return [f"the current is straight or flat between samples {k} apart: the record looks resampled from a "
+            f"logger at about {1.0 / (k * med):.3g} Hz onto {1.0 / med:.3g} Hz (linear interpolation or held "
+            "values); the samples in between are not measurements, yet the fit % and the evidence count them as "
+            "such: export the record at the logger's own rate if you can"]
 
 
 #: longest start-up record compare and diagnose accept [s]: a start-up, not a shift (split a log first)
