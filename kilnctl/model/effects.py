@@ -213,6 +213,32 @@ class KilnUnbalance(Component):
 
 
 @register
+class KilnSecondHarmonic(Component):
+    """Twice-per-revolution torque on the kiln (shell ovality, two eccentric masses), beside the unbalance.
+
+    Torque -T_unb2*sin(2 theta_o + phi_unb2) on the kiln, on the kiln angle ``theta_o`` that
+    :class:`KilnUnbalance` integrates: the second harmonic of a kiln-angle-periodic load whose first is the
+    unbalance.  Not a catalogue effect of its own: add it with ``kiln_unbalance`` (``--effects
+    kiln_unbalance,kiln_second_harmonic``) to compare or simulate a load of two harmonics.
+    """
+
+    name = "kiln_second_harmonic"
+    summary = "twice-per-revolution kiln torque T_unb2*sin(2 theta_o + phi_unb2)"
+    param_names = ("T_unb2", "phi_unb2")
+    parameters = (
+        param("T_unb2", 0.0, "N*m", "assumed: none unless fitted (a shell's ovality, two eccentric masses)",
+              "amplitude of the twice-per-revolution kiln torque (component 'kiln_second_harmonic')", "effects",
+              "nonnegative"),
+        param("phi_unb2", 0.0, "rad", "assumed: phase of the ovality at t = 0",
+              "phase of the twice-per-revolution torque (component 'kiln_second_harmonic')", "effects", "finite"),
+    )
+    requires = ("kiln_unbalance",)
+
+    def loads(self, e, mode):
+        e.add_torque("kiln", -e.p.T_unb2 * ca.sin(2.0 * e.x["theta_o"] + e.p.phi_unb2))
+
+
+@register
 class ViscousDrag(Component):
     """Viscous drag on the kiln, torque -B_o*omega_o (seals, tyre slip, lubricant)."""
 
