@@ -172,6 +172,18 @@ def test_compare_cli_json(tmp_path, capsys):
     assert d["effects"] == ["second_motor"] and d["fit_percent"]["current_A"] > 95
     html = (tmp_path / "rep" / "compare.html").read_text()
     assert "data:image/png;base64," in html
+    # how the file was read goes into the report files too (red team 7: on the terminal only); truth: two rows
+    # cut out of the record by hand, which the reader notes as missing samples
+    rows = data.read_text().splitlines(keepends=True)
+    k = next(i for i, r in enumerate(rows) if r[:1].isdigit()) + 500
+    (tmp_path / "gap.csv").write_text("".join(rows[:k] + rows[k + 2:]))
+    args = ap.parse_args(["compare", "--data", str(tmp_path / "gap.csv"), "--config", str(cfg), "--json",
+                          "--report", str(tmp_path / "rep2")])
+    assert args.func(args) == 0
+    capsys.readouterr()
+    notes = json.loads((tmp_path / "rep2" / "compare.json").read_text())["record_notes"]
+    assert any("missing samples" in n for n in notes)
+    assert "Note: record: " in (tmp_path / "rep2" / "compare.html").read_text()
 
 
 # --- calibrate ---------------------------------------------------------------------

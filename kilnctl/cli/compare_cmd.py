@@ -49,7 +49,7 @@ class CompareCommand(Command):
         if args.report:
             from ..measure.report import write_comparison_report
 
-            write_comparison_report(c, args.report, protect=(args.data, args.config))
+            write_comparison_report(c, args.report, protect=(args.data, args.config), record_notes=data.notes)
         if args.json:
             print_json(d)
             return 0

@@ -1257,7 +1257,7 @@ def write_diagnosis_report(d, folder, protect=()) -> list:
 
 
 # --- comparison ------------------------------------------------------------------------------------
-def comparison_html(c, fig=None) -> str:
+def comparison_html(c, fig=None, record_notes=()) -> str:
     """Return the report of a comparison as one self-contained HTML page.
 
     Parameters
@@ -1266,6 +1266,9 @@ def comparison_html(c, fig=None) -> str:
         A comparison of a model with a record.
     fig : matplotlib.figure.Figure or bytes, optional
         Its figure, already drawn (or its PNG content).
+    record_notes : sequence of str
+        How the record was read (:attr:`Measurement.notes <kilnctl.measure.io.Measurement.notes>`: units
+        converted, samples missing ...), shown as notes.
 
     Returns
     -------
@@ -1301,11 +1304,12 @@ def comparison_html(c, fig=None) -> str:
              "<h2>Where it fails</h2>" + _failing_table(fails)]
     return report_page(f"{record_name_of(c.source)} against the {model}", head, parts,
                        warnings=[("Caution", text) for text in c.cautions],
-                       terms=("fit", "sigma", "whiteness"), notes=c.experiment.notes,
+                       terms=("fit", "sigma", "whiteness"),
+                       notes=[f"record: {n}" for n in record_notes] + list(c.experiment.notes),
                        settings={"model": c.model, "effects": list(c.effects), "record": record_name_of(c.source)})
 
 
-def write_comparison_report(c, folder, protect=()) -> list:
+def write_comparison_report(c, folder, protect=(), record_notes=()) -> list:
     """Write ``compare.html`` (self-contained), ``compare.json`` and ``compare.png`` into a folder.
 
     Parameters
@@ -1316,6 +1320,8 @@ def write_comparison_report(c, folder, protect=()) -> list:
         Destination folder (created).
     protect : sequence of path-like
         Input files never to overwrite.
+    record_notes : sequence of str
+        How the record was read; in the page and in ``compare.json`` (``record_notes``).
 
     Returns
     -------
@@ -1323,4 +1329,5 @@ def write_comparison_report(c, folder, protect=()) -> list:
         Files written (each whole or not at all).
     """
     png = png_bytes(c.plot())
-    return write_page_files(folder, "compare", comparison_html(c, png), c.to_dict(), {"compare.png": png}, protect)
+    return write_page_files(folder, "compare", comparison_html(c, png, record_notes),
+                            dict(c.to_dict(), record_notes=list(record_notes)), {"compare.png": png}, protect)
