@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import DesignError, ParameterError
+from .errors import DesignError
 from .params import Parameters
 
 __all__ = ["PIDGains", "GAIN_UNITS", "resolve_gains", "use_designer"]
@@ -147,9 +147,7 @@ def resolve_gains(params: Parameters) -> Parameters:
     ParameterError
         ``params`` is not a :class:`~kilnctl.params.Parameters` (a dict of values, a file name).
     """
-    if not isinstance(params, Parameters):
-        raise ParameterError(f"params must be a kilnctl.Parameters (Parameters(m_v=5e5), or "
-                             f"Parameters.from_toml(path) for a file), not {type(params).__name__}")
+    Parameters.require(params, hint="Parameters(m_v=5e5), or Parameters.from_toml(path) for a file")
     if params.gains == "given":
         return params
     if _designer is None:

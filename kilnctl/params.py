@@ -416,6 +416,35 @@ class Parameters(Mapping):
     # _specs: the declaration table (SPECS.snapshot()) the values were checked against
     __slots__ = ("_values", "_specs")
 
+    @staticmethod
+    def require(value, what: str = "params", hint: str | None = None, error: type = ParameterError) -> "Parameters":
+        """Return ``value``, refused with a clear error when it is not a :class:`Parameters` (a dict, a file name).
+
+        Parameters
+        ----------
+        value : object
+            What the caller was given.
+        what : str, default 'params'
+            The argument's name, for the message (with a prefix naming the file when there is one).
+        hint : str, optional
+            How to make one, shown in parentheses.
+        error : type, default ParameterError
+            Exception class raised (a :class:`~kilnctl.errors.KilnctlError` subclass).
+
+        Returns
+        -------
+        Parameters
+
+        Raises
+        ------
+        ParameterError
+            (or ``error``) ``what must be a kilnctl.Parameters (hint), not TYPE``.
+        """
+        if not isinstance(value, Parameters):
+            raise error(f"{what} must be a kilnctl.Parameters{f' ({hint})' if hint else ''}, not "
+                        f"{type(value).__name__}")
+        return value
+
     def __init__(self, values: Mapping[str, Any] | None = None, **overrides: Any):
         if values is not None and not isinstance(values, Mapping):
             hint = (": for a file use Parameters.from_toml(path)" if isinstance(values, (str, os.PathLike))

@@ -28,7 +28,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from .errors import EventStormError, ModelError, ParameterError, SimulationError, close_matches_hint
+from .errors import EventStormError, ModelError, SimulationError, close_matches_hint
 from .gains import resolve_gains
 from .model import Guard, component_names, get_plant
 from .model.stepper import FIRST_STEP, GUARD_EPS, RUNAWAY, STATUS
@@ -643,8 +643,7 @@ def simulate(params: Parameters | None = None, model: str = "macro", t_end: floa
         Unknown model or component.
     """
     params = Parameters() if params is None else params
-    if not isinstance(params, Parameters):
-        raise ParameterError(f"params must be a kilnctl.Parameters, not {type(params).__name__}")
+    Parameters.require(params)
     names, params, label = plant_structure(params, model, effects, remove, components)
     dt = DEFAULT_DT.get(label if label != "custom" else model, 1e-3) if dt is None else dt
     _check_horizon(t_end, dt)

@@ -329,13 +329,11 @@ def learned_cautions(args) -> list[str]:
     return diagnosis_cautions(args.model_from)
 
 
-def print_diagnosis_cautions(args) -> None:
-    """Print what the diagnosis behind ``--model-from`` said to read before acting on its model (nothing
-    without ``--model-from``, or when it said nothing of the kind); see
-    :func:`kilnctl.design.learned.diagnosis_cautions`."""
+def print_diagnosis_cautions(args, said: list[str]) -> None:
+    """Print ``said``, what the diagnosis behind ``--model-from`` said to read before acting on its model
+    (:func:`learned_cautions`); nothing when it is empty."""
     import textwrap
 
-    said = learned_cautions(args)
     if not said:
         return
     print(f"\nRead what the diagnosis that learned this model ({args.model_from}) said before acting on it:")

@@ -8,7 +8,8 @@ responses, whole or not at all, never over the ``--config`` file.
 from __future__ import annotations
 
 from . import print_json
-from .common import Command, add_config_arg, add_options, check_output_files, load_params, print_diagnosis_cautions
+from .common import (Command, add_config_arg, add_options, check_output_files, learned_cautions, load_params,
+                     print_diagnosis_cautions)
 
 
 class DesignCommand(Command):
@@ -63,9 +64,7 @@ class DesignCommand(Command):
                 out["learned"] = {"components": list(learned[0].components()), "selected": learned[1],
                                   **learned[2].to_dict()}
                 if args.model_from:
-                    from ..design.learned import diagnosis_cautions
-
-                    out["learned"]["diagnosis_cautions"] = diagnosis_cautions(args.model_from)
+                    out["learned"]["diagnosis_cautions"] = learned_cautions(args)
             print_json(out)
         else:
             print(result.summary())
@@ -74,7 +73,7 @@ class DesignCommand(Command):
                       f"{', '.join(learned[1]) or 'no effect added'}"
                       + (f" (from {args.model_from})" if args.model_from else ""))
                 print(learned[2].summary())
-                print_diagnosis_cautions(args)
+                print_diagnosis_cautions(args, learned_cautions(args))
             if args.plot:
                 print(f"\nfigure written to {args.plot}")
         return 0

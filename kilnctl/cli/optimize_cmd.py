@@ -76,6 +76,7 @@ class OptimizeRampCommand(Command):
             check_folder_can_be_made("--report", args.report)
         params = load_params(args)
         structure, params, _, _ = learned_structure_args(args, params, "micro")
+        said = learned_cautions(args)  # what the diagnosis behind --model-from said, read once
         problem = RampProblem(params, profile=args.profile, t_max=args.t_max, horizon=args.horizon,
                               objective=args.objective, scenarios=default_scenarios() if args.robust else (),
                               max_rate=args.max_rate, effects=structure or ())
@@ -101,7 +102,7 @@ class OptimizeRampCommand(Command):
         if args.report:
             from ..pages import write_ramp_report
 
-            write_ramp_report(result, args.report, protect=(args.config,), cautions=learned_cautions(args))
+            write_ramp_report(result, args.report, protect=(args.config,), cautions=said)
         if args.json:
             out = result.summary()
             if price is not None:
@@ -112,7 +113,7 @@ class OptimizeRampCommand(Command):
             print(result.table())
             if price is not None:
                 print(price.table())
-            print_diagnosis_cautions(args)
+            print_diagnosis_cautions(args, said)
             if args.plot:
                 print(f"  wrote plot  {args.plot}")
             if args.report:

@@ -39,13 +39,14 @@ class VerifyCommand(Command):
             check_folder_can_be_made("--report", args.report)
         params = load_params(args)
         components, params, _, _ = learned_structure_args(args, params, args.model)
+        said = learned_cautions(args)  # what the diagnosis behind --model-from said, read once
         v = verify(params, model=args.model, t_end=args.t_end, components=components)
         if args.plot:
             save_figure(v.plot(), args.plot)
         if args.report:
             from ..pages import write_verify_report
 
-            write_verify_report(v, args.report, protect=(args.config,), cautions=learned_cautions(args))
+            write_verify_report(v, args.report, protect=(args.config,), cautions=said)
         if args.json:
             print_json(v.to_dict())
         else:
@@ -58,7 +59,7 @@ class VerifyCommand(Command):
                 print(f"nonlinear plant: the {args.model} model with {', '.join(added) or 'nothing added'}"
                       + (f" and the calibrated values of {args.model_from}" if args.model_from else ""))
             print(v)
-            print_diagnosis_cautions(args)
+            print_diagnosis_cautions(args, said)
             if args.report:
                 print(f"wrote {args.report}/verify.html, verify.json, verify.png")
         return 0

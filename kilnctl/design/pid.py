@@ -377,9 +377,7 @@ def design_pid(params: Parameters, requirements: Requirements | None = None, *,
     DesignError
         For malformed requirements.
     """
-    if not isinstance(params, Parameters):
-        raise DesignError(f"params must be a kilnctl.Parameters (Parameters(m_v=5e5), or Parameters.from_toml(path) "
-                          f"for a file), not {type(params).__name__}")
+    Parameters.require(params, hint="Parameters(m_v=5e5), or Parameters.from_toml(path) for a file", error=DesignError)
     if requirements is None:
         requirements = Requirements()
     if not isinstance(requirements, Requirements):

@@ -557,9 +557,8 @@ def _interpret(table, params, columns, *, log=False) -> Measurement:
     """Find kilnctl's channels in a RawTable, convert them to s, A, rpm, and check the record."""
     from .tables import QUANTITY, convert, parse_columns, split_unit
 
-    if params is not None and not isinstance(params, Parameters):
-        raise ParameterError(f"{table.source}: params must be a kilnctl.Parameters (the setup: "
-                             f"load_setup(path).params), not {type(params).__name__}")
+    if params is not None:
+        Parameters.require(params, f"{table.source}: params", "the setup: load_setup(path).params")
 
     columns = parse_columns(columns) if not isinstance(columns, dict) else parse_columns(dict(columns))
     src, names, notes = table.source, table.names, list(table.notes)

@@ -360,8 +360,7 @@ class RampProblem:
     effects: tuple = ()
 
     def __post_init__(self):
-        if not isinstance(self.params, Parameters):
-            raise ParameterError(f"params must be a kilnctl.Parameters, not {type(self.params).__name__}")
+        Parameters.require(self.params)
         self.profile = Profile.parse(self.profile)
         from .model import check_effects
 

@@ -131,8 +131,7 @@ class Study:
         self.space = space
         check_points(len(space), max_points, what="the study")
         self.base = Parameters() if base is None else base
-        if not isinstance(self.base, Parameters):
-            raise ParameterError(f"base must be a kilnctl.Parameters, not {type(self.base).__name__}")
+        Parameters.require(self.base, "base")
         if isinstance(model, Structure):
             if effects or remove:
                 raise ParameterError("give the effects inside the Structure (Structure.with_effects), not as "
