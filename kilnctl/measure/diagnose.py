@@ -1579,14 +1579,17 @@ def _falls(m, exp):
 
 def _pinned(form, values: dict) -> list[str]:
     """The names of ``form``'s added parameters whose ``values`` lie within :data:`FORM_BOUND` of their range
-    from a bound (of the range of the logarithm for a 'log' parameter)."""
+    from a bound (of the range of the logarithm for a 'log' parameter) that is not one of the form's physical
+    limits (:attr:`~kilnctl.model.catalogue.Form.ends`: the backlash's coupling rigid at its upper bounds)."""
     out = []
     for fp in form.parameters:
         if fp.kind == "log":
             lo, hi, v = math.log(fp.lower), math.log(fp.upper), math.log(max(values[fp.name], fp.lower))
         else:
             lo, hi, v = fp.lower, fp.upper, values[fp.name]
-        if min(v - lo, hi - v) < FORM_BOUND * (hi - lo):
+        end = form.ends.get(fp.name)
+        band = FORM_BOUND * (hi - lo)
+        if (v - lo < band and end != "lower") or (hi - v < band and end != "upper"):
             out.append(fp.name)
     return out
 

@@ -80,10 +80,17 @@ class Form:
         Values of the added parameters at which the form behaves nearly as
         the effect's own form: the refit starts there (with the effect's
         fitted values), so it ends about as well as the effect's own form at
-        worst.
+        worst.  Empty when the added parameters are the model's own (the
+        backlash's coupling): their setup values are the effect's own form.
     starts : callable
         ``starts(values) -> list of dict``: further starting points, from
         the effect's fitted values (the model's ``values``) [unit of each].
+    ends : dict
+        ``{parameter: 'lower' or 'upper'}``: a bound of an added parameter
+        that is a physical limit of the form (the backlash's coupling
+        rigid at the upper bounds of k_c and c_c), which a fit may reach
+        without the form standing in for another difference.  At any other
+        bound the diagnosis does not use the form.
     """
 
     name: str
@@ -92,6 +99,7 @@ class Form:
     parameters: tuple
     near: dict
     starts: Callable = field(repr=False, default=lambda values: [])
+    ends: dict = field(default_factory=dict)
 
 
 @dataclass(frozen=True)

@@ -15,11 +15,14 @@ import numpy as np
 
 from ..params import param
 from .base import Component, Guard, register
-from .catalogue import Effect, FreeParameter
+from .catalogue import Effect, Form, FreeParameter
 
 #: scale of the mesh deflection in guards [m]
 DS_SCALE = 1e-4
 
+
+#: motor inertia the backlash's ``coupling`` form sets its starting damping on (Table 1's J_m) [kg*m^2]
+J_M_NOMINAL = 21.5
 
 #: a fitted drive train damped at or above this ratio of its torsional mode has no ring to show (a step response
 #: overshoots by less than 5 %) [-]
@@ -292,7 +295,24 @@ class Mesh(Component):
                   "free travel gap_0 * delta_x shows in a start-up: gap_0 is kept at the setup's value. The impact "
                   "is a spike one or two samples long whose time moves with the gap, so the cost has a valley a "
                   "fraction of a millimetre wide: starts are compared, and fits begin, on a residual smoothed over "
-                  "0.4 s, then 0.1 s, then none."),
+                  "0.4 s, then 0.1 s, then none. When it is supported, the elastomeric coupling's stiffness and "
+                  "damping are fitted beside the play (its 'coupling' form).",
+            forms=(Form("coupling",
+                        "the play with the link behind it fitted: the elastomeric coupling's stiffness k_c and "
+                        "damping c_c (motor side), which set how the drive train rings after the teeth meet; the "
+                        "coupling's curve is assumed (the thesis [9] is not available), and a drive with a "
+                        "stiffer, softer or better damped link than assumed rings otherwise",
+                        (), (FreeParameter("k_c", 1e4, 1e9, "log", 1e5),
+                             FreeParameter("c_c", 1.0, 1e6, "log", 150.0)),
+                        # at the setup's k_c and c_c the form is the effect's own
+                        near={},
+                        # a stiffer link in three decades, damped at 0.1, 0.3 and 1 of its mode on the motor
+                        # (c = 2 zeta sqrt(k J_m))
+                        starts=lambda v: [{"k_c": k, "c_c": 2.0 * z * math.sqrt(k * J_M_NOMINAL)}
+                                          for k in (1e6, 1e7, 1e8) for z in (0.1, 0.3, 1.0)],
+                        # a drive with no compliant coupling behind the play (a plant with a stiff link): the
+                        # fit may take either to its upper bound, where the coupling is rigid
+                        ends={"k_c": "upper", "c_c": "upper"}),)),
     )
     requires = ("pinion", "kiln")
     modes = ("contact", "gap", "back")
