@@ -128,6 +128,20 @@ class VoltageLimit(Component):
     The PI voltage is clamped to +-V_max; while clamped the integrator is
     frozen (conditional integration).  The derivative action, realised in the
     current path (eq. 21), is not clamped.
+
+    Modes ``free``, ``upper``, ``lower`` and the Filippov sliding modes
+    ``slide_upper``, ``slide_lower``: when freezing the integrator brings the
+    PI voltage back below the limit at once while running it pushes the
+    voltage above again (a slowly ringing speed filter against the limit), the
+    two modes would switch into one another without time passing.  The
+    sliding mode holds the voltage at the limit and runs the integrator at the
+    fraction u in [0, 1] of the time that keeps the PI voltage there (solved
+    by the plant: :meth:`~kilnctl.model.assembly.Eqs.equivalent_control`).  It
+    ends in ``upper`` when even a frozen integrator lets the PI voltage rise,
+    and in ``free`` when even a running one lets it fall.  A clamped voltage
+    is released into the sliding mode, which passes on to ``free`` at the
+    same instant unless the integrator would bring the voltage straight back,
+    as the current limit's is.
     """
 
     name = "voltage_limit"
@@ -138,24 +152,46 @@ class VoltageLimit(Component):
               "armature voltage limit of the drive (applies to the PI output)", "drive"),
     )
     requires = ("pid",)
-    modes = ("free", "upper", "lower")
+    modes = ("free", "upper", "lower", "slide_upper", "slide_lower")
 
     def signals(self, e, mode):
         p = e.p
-        if mode == "upper":
-            e.sig["e_a"], e.sig["integrate"] = p.V_max, ca.SX(0)
-        elif mode == "lower":
-            e.sig["e_a"], e.sig["integrate"] = -p.V_max, ca.SX(0)
+        if mode == "free":
+            return
+        e.sig["e_a"] = p.V_max if mode in ("upper", "slide_upper") else -p.V_max
+        if mode.startswith("slide"):
+            e.sig["integrate"] = e.sig["u_voltage_limit"] = e.equivalent_control(self.name)
+        else:
+            e.sig["integrate"] = ca.SX(0)
 
     def finish(self, e, mode):
         p, epi = e.p, e.sig["e_pi"]
         if mode == "free":
             e.add_guard(Guard("voltage_limit", self.name, (p.V_max - epi) / p.V_max, "upper"))
             e.add_guard(Guard("voltage_limit", self.name, (p.V_max + epi) / p.V_max, "lower"))
-        elif mode == "upper":
-            e.add_guard(Guard("voltage_limit_release", self.name, (epi - p.V_max) / p.V_max, "free"))
-        else:
-            e.add_guard(Guard("voltage_limit_release", self.name, (-p.V_max - epi) / p.V_max, "free"))
+            return
+        sign = 1.0 if mode in ("upper", "slide_upper") else -1.0
+        # how far the PI voltage lies beyond the limit, per V_max: zero on the sliding surface
+        beyond = (sign * epi - p.V_max) / p.V_max
+        if mode.startswith("slide"):
+            # on entering, the integrator is put where the PI voltage is exactly at the limit (k_I > 0), so
+            # integration drift while sliding cannot leave it off the surface
+            e.projection["z"] = ca.if_else(p.k_I != 0, (sign * p.V_max - p.k_p * e.sig["e_f"]) / p.k_I, e.x["z"])
+            e.hold_constant(e.sig["u_voltage_limit"], beyond, below="upper" if sign > 0 else "lower",
+                            above="free", component=self.name)
+            return
+        # released into the sliding mode, which hands over to free running at once unless running the
+        # integrator would push the voltage straight back to the limit (then it slides along it)
+        e.add_guard(Guard("voltage_limit_release", self.name, beyond, "slide_upper" if sign > 0 else "slide_lower"))
+
+    def sliding_mode(self, cycle):
+        """Sliding at the limit when the clamp and free running would alternate without time passing."""
+        if "free" in cycle:
+            if "upper" in cycle or "slide_upper" in cycle:
+                return "slide_upper"
+            if "lower" in cycle or "slide_lower" in cycle:
+                return "slide_lower"
+        return None
 
 
 @register
