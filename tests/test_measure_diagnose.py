@@ -1032,8 +1032,10 @@ def test_final_check_removes_a_compliance_whose_final_values_cannot_ring():
         base = {"mu_c": 0.39, "mu_s": 0.52, "m_v": 6.0e5, "J_v": 1.6e6}
         final = SimpleNamespace(values_=dict(base, tau_s=0.0156, k_po=k_po, C_po=C_po), params_=SETUP,
                                 cost_=1.0)
-        d._calibrate = lambda m, params, rest, *a: SimpleNamespace(values_=dict(base, tau_s=0.0156),
-                                                                    params_=SETUP, cost_=1.1)
+        # every refit without the compliance ends alike (the lag in its own form or in another: the first,
+        # its own, is kept)
+        d._calibrate = lambda m, params, rest, *a: SimpleNamespace(values_=dict(a[2]), params_=SETUP, cost_=1.1,
+                                                                    bic_=0.0)
         d._evidence = lambda m, e, cal, without, *a: CandidateResult(e, -182.0, 0.0, {}, {}, {}, [], [], True,
                                                                      "", 0.0, delta_bic_corrected=-418.0)
         return d._final_check(None, SETUP, ["speed_sensor_lag", "drivetrain_compliance"], final, None, None, None,
@@ -1076,6 +1078,49 @@ def test_final_check_judges_at_the_final_values_when_the_refit_without_an_effect
     # the refit failed, then the structure was judged at the final values (and, once chosen, evaluated there)
     assert [n for rest, n in calls if rest == ("second_motor",)] == [1, 0, 0]
     assert "B_o" not in kept.values_ and kept.values_["J_m2"] == 30.0
+
+
+@pytest.mark.parametrize("T_unb2, replaced", [(1.5e5, True), (1.99e7, False)])
+def test_final_check_removes_an_effect_that_another_effects_other_form_replaces(T_unb2, replaced):
+    # truth by construction (red team 6's r5: a motor Coulomb friction stood in for the second harmonic of a
+    # two-harmonic kiln load).  Without the friction, the unbalance refitted in its own form has a BIC 100 above
+    # the final model's, in its two_harmonic form 50 below it: the friction goes, and the unbalance takes the
+    # form.  A form whose added amplitude ends at its upper bound (2e7 N m) stands in for something else and is
+    # not used: the friction then stays.  The calibrations and the evidence are stand-ins: only the check's logic
+    from kilnctl.measure.evidence import CandidateResult
+
+    d = Diagnosis(SETUP)
+    base = {"mu_c": 0.39, "mu_s": 0.52, "m_v": 6.0e5, "J_v": 1.6e6}
+    final = SimpleNamespace(values_=dict(base, T_unb=2e5, phi_unb=0.6, T_cm=244.0), params_=SETUP, bic_=0.0)
+    seen = []
+
+    def calibrate(m, params, rest, scales, mask, init, starts, *a):
+        form = d._forms.get("kiln_unbalance")
+        seen.append((rest, form, a[-2]))
+        if rest == ("motor_coulomb_friction",):
+            return SimpleNamespace(values_=dict(init), params_=SETUP, bic_=500.0)
+        if form == "two_harmonic":
+            if a[-2] == 1:  # the check's refit, from no second harmonic and from half the first in four phases
+                assert init["T_unb2"] == 0.0 and {s["T_unb2"] for s in starts} == {1e5}
+            return SimpleNamespace(values_=dict(init, T_unb2=T_unb2), params_=SETUP, bic_=-50.0)
+        return SimpleNamespace(values_=dict(init), params_=SETUP, bic_=100.0)
+
+    d._calibrate = calibrate
+    d._evidence = lambda m, e, cal, without, *a: CandidateResult(e, cal.bic_ - without.bic_, 0.0, {}, {}, {}, [],
+                                                                 [], True, "", 0.0)
+    selected, kept, dropped = d._final_check(None, SETUP, ["kiln_unbalance", "motor_coulomb_friction"], final,
+                                             None, None, None, None, lambda s: None)
+    # each effect checked with the others in their own form, and the unbalance in its other form too
+    assert [(rest, form) for rest, form, n in seen if n == 1][:3] == [
+        (("motor_coulomb_friction",), None), (("kiln_unbalance",), None), (("kiln_unbalance",), "two_harmonic")]
+    if not replaced:
+        assert selected == ["kiln_unbalance", "motor_coulomb_friction"] and dropped == [] and d._forms == {}
+        return
+    assert selected == ["kiln_unbalance"] and d._forms == {"kiln_unbalance": "two_harmonic"}
+    (r,) = dropped
+    assert r.effect == "motor_coulomb_friction" and not r.supported and r.stand_in
+    assert "without it with kiln_unbalance in its two_harmonic form" in r.reason and "+50.0" in r.reason
+    assert kept.values_["T_unb2"] == T_unb2 and "T_cm" not in kept.values_
 
 
 @pytest.mark.slow  # about a minute: seven local fits of stick-slip structures on a 40 s record at 50 Hz

@@ -134,3 +134,29 @@ def test_kiln_second_harmonic_equals_the_red6_plants_two_harmonic_load():
     far = t > 0.5
     assert np.max(np.abs(i_two - i_one)[far]) > 25.0
     assert np.max(np.abs(k_two - i_two)[far]) < 0.2
+
+
+@pytest.mark.slow  # about 50 s: a diagnosis of a 60 s record with three candidates
+def test_a_two_harmonic_load_takes_the_place_of_the_friction_that_stood_in_for_its_second_harmonic(tmp_path):
+    """r5: red team 6's plant (written apart from kilnctl) with a kiln load of two harmonics, 2.5e5 sin(th + 0.6)
+    + 1.5e5 sin(2 th + 2.0) N m, and a second motor of 30 kg m^2, on a record of 60 s.  Truth: the plant's
+    effects, as the red team wrote them.  The rounds add a motor Coulomb friction of 244 N m first (dBIC -5377
+    against the unbalance's -1153), then the unbalance and the second motor; the friction stands in for the
+    second harmonic.  The final check refits the model without each effect with the others in their other forms
+    too: without the friction, with the unbalance in its two_harmonic form, BIC falls by 461, so the friction
+    goes and the unbalance takes that form (97.5 % against 97.3 %)."""
+    from kilnctl.measure import load_setup, read_record
+    from kilnctl.measure.diagnose import Diagnosis
+
+    rec = next(r for r in rr.RECORDS if r.name == "r5_unb12_motor2")
+    tr = rr.write_record(rec, tmp_path)
+    setup = load_setup(tr["toml"])
+    m = read_record(tr["csv"], setup.params)
+    d = Diagnosis(setup.params, candidates=("second_motor", "kiln_unbalance", "motor_coulomb_friction")).fit(m)
+    assert sorted(d.selected_) == ["kiln_unbalance", "second_motor"]
+    assert d.forms_ == {"kiln_unbalance": "two_harmonic"}
+    (gone,) = d.removed_
+    assert gone.effect == "motor_coulomb_friction" and "two_harmonic form" in gone.reason
+    v = d.final_calibration_.values_
+    assert v["J_m2"] == pytest.approx(30.0, rel=0.1)
+    assert v["T_unb"] == pytest.approx(2.5e5, rel=0.15) and v["T_unb2"] == pytest.approx(1.5e5, rel=0.15)

@@ -623,7 +623,7 @@ class Diagnosis:
         second-order form -2047).  Every form tried is listed in ``form_results_``.
         """
         jobs = [(i, form) for i, r in enumerate(results) if r.supported and r.calibration is not None
-                and r.form is None for form in CATALOGUE[r.effect].forms]
+                and r.form is None for form in CATALOGUE[r.effect].forms if form.in_rounds]
         if not jobs:
             return results
         ff = self._first_failure(m, current, exp)
@@ -960,50 +960,92 @@ class Diagnosis:
         """
         selected, dropped = list(selected), []
         while selected:
-            args = []
+            jobs = []  # (effect checked, forms of the rest, calibration arguments)
             for e in selected:
                 rest = tuple(x for x in selected if x != e)
-                names = self._free_names(params, rest)
-                init = {k: v for k, v in final.values_.items() if k in names}
-                args.append((m, params, rest, "std", None, init, (), exp, None, None, 1, True))
+                for forms, form in self._rest_forms(rest):
+                    with self._using_forms(forms):
+                        names = self._free_names(params, rest)
+                    init = {k: v for k, v in final.values_.items() if k in names}
+                    starts = ()
+                    if form is not None:  # another effect of the rest in another form, from where it is its own
+                        init.update(form.near)
+                        starts = tuple(form.starts(final.values_))
+                    jobs.append((e, forms, form, (m, params, rest, "std", None, init, starts, exp, None, None, 1,
+                                                  True)))
+            cals = self._run_calibrations([j[3] for j in jobs], pool, [j[1] for j in jobs])
             trials = []
-            for e, a, without in zip(selected, args, self._run_calibrations(args, pool)):
-                if without is None:  # its refit failed: the structure without e at the final values
-                    try:
-                        without = self._calibrate(*a[:10], 0, True)
-                    except KilnctlError:  # nor can it be run there: e stays
+            for e in selected:
+                best = None
+                for (e2, forms, form, a), without in zip(jobs, cals):
+                    if e2 != e:
                         continue
+                    if without is None and form is None:  # its refit failed: the structure without e at the
+                        try:                               # final values
+                            with self._using_forms(forms):
+                                without = self._calibrate(*a[:10], 0, True)
+                        except KilnctlError:  # nor can it be run there
+                            without = None
+                    if without is None or (form is not None and _pinned(form, without.values_)):
+                        continue  # a form that ends at a bound of its range stands in for something else
+                    if best is None or without.bic_ < best[2].bic_:
+                        best = (forms, a, without, form)
+                if best is None:  # e stays
+                    continue
+                forms, a, without, form = best
                 r = self._evidence(m, e, final, without, scales, train, test, exp, 0.0)
                 eff = CATALOGUE[e]
                 odd = eff.contradicts(final.values_, final.params_) if eff.contradicts else None
-                trials.append((e, a, without, r, odd))
+                trials.append((e, a, without, r, odd, forms, form))
                 self._note_check("final", r)
             weak = [tr for tr in trials if not tr[3].delta_bic < -self.min_delta_bic or tr[4]]
             if not weak:
                 break
-            e, a, without, r, odd = max(weak, key=lambda tr: tr[3].delta_bic)
+            e, a, without, r, odd, forms, form = max(weak, key=lambda tr: tr[3].delta_bic)
             try:  # the refit's values, evaluated here (a worker's calibration travels without its simulation)
-                refit = self._calibrate(m, params, a[2], "std", None, dict(without.values_), (), exp, None, None, 0,
-                                        True)
+                with self._using_forms(forms):
+                    refit = self._calibrate(m, params, a[2], "std", None, dict(without.values_), (), exp, None,
+                                            None, 0, True)
             except KilnctlError:
                 break
             r.supported = False
             # the final fit saw the whole record: no part of it is held out (the tables print "-")
             r.holdout_gain = r.holdout_z = math.nan
+            other = ""
+            if form is not None:
+                o = next(x for x in a[2] if forms.get(x) != self._forms.get(x))
+                other = f" with {o} in its {form.name} form"
             if r.delta_bic < -self.min_delta_bic:  # it matters, but no longer by its own signature
                 r.stand_in = True
                 r.reason = (f"removed in the final check: at the final fit's values {odd} (keeping it: dBIC "
                             f"{r.delta_bic:+.1f})")
                 say(f"removed {e} in the final check: at the final values it no longer shows its own signature")
             else:
-                r.reason = (f"removed in the final check: the model without it, refitted on the whole record from "
-                            f"the final fit's values, fits as well or better (dBIC of keeping it {r.delta_bic:+.1f}, "
-                            f"not below {-self.min_delta_bic:g}): the other parameters take its place")
-                say(f"removed {e} in the final check: refitted without it, the model fits as well or better (dBIC of "
-                    f"keeping it {r.delta_bic:+.1f})")
+                r.reason = (f"removed in the final check: the model without it{other}, refitted on the whole record "
+                            f"from the final fit's values, fits as well or better (dBIC of keeping it "
+                            f"{r.delta_bic:+.1f}, not below {-self.min_delta_bic:g}): the other parameters take its "
+                            f"place")
+                say(f"removed {e} in the final check: refitted without it{other}, the model fits as well or better "
+                    f"(dBIC of keeping it {r.delta_bic:+.1f})")
+            if form is not None:
+                r.stand_in = True
             dropped.append(r)
+            self._forms = dict(forms)
             selected, final = list(a[2]), refit
         return selected, final, dropped
+
+    def _rest_forms(self, rest):
+        """The forms to refit ``rest`` (selected effects without the one checked) in: the diagnosis' own
+        ({effect: form name}, with None), then, for each effect of ``rest`` in its own form that has other
+        forms (:attr:`~kilnctl.model.catalogue.Effect.forms`), the same with that effect in each (and the
+        :class:`~kilnctl.model.catalogue.Form`)."""
+        own = {k: v for k, v in self._forms.items() if k in rest}
+        out = [(own, None)]
+        for o in rest:
+            if o in own:
+                continue
+            out += [(dict(own, **{o: f.name}), f) for f in CATALOGUE[o].forms]
+        return out
 
     def _note_check(self, check: str, r) -> None:
         """Keep a check's judgement of a selected effect in ``checks_``."""

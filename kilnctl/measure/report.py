@@ -365,9 +365,10 @@ def _effect_params(effect) -> tuple[str, ...]:
 
 
 def _form_params_of(effect, name) -> tuple[str, ...]:
-    """The parameters the form ``name`` of an effect adds to the effect's own (none for another name)."""
+    """The parameters the form ``name`` of an effect adds to the effect's own, each with its partner (none for
+    another name)."""
     form = CATALOGUE[effect].form(name) if effect in CATALOGUE else None
-    return tuple(fp.name for fp in form.parameters) if form is not None else ()
+    return tuple(k for fp in form.parameters for k in (fp.name, fp.partner) if k) if form is not None else ()
 
 
 def _form_params(d, effect) -> tuple[str, ...]:

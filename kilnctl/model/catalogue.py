@@ -91,6 +91,11 @@ class Form:
         rigid at the upper bounds of k_c and c_c), which a fit may reach
         without the form standing in for another difference.  At any other
         bound the diagnosis does not use the form.
+    in_rounds : bool
+        Tried in each round when the effect is a supported candidate (True),
+        or only in the final check, where the form must take the place of
+        another selected effect (False: a form the rounds could not tell
+        from noise on a usual record).
     """
 
     name: str
@@ -100,6 +105,7 @@ class Form:
     near: dict
     starts: Callable = field(repr=False, default=lambda values: [])
     ends: dict = field(default_factory=dict)
+    in_rounds: bool = True
 
 
 @dataclass(frozen=True)

@@ -198,7 +198,25 @@ class KilnUnbalance(Component):
             short_record_note="a slow drift, which a current-sensor offset or gain error, or slowly correlated "
                               "noise, also produce",
             notes="fitted as the pair (T cos phi, T sin phi), which is linear in the torque; T_unb and phi_unb "
-                  "and their standard errors follow."),
+                  "and their standard errors follow.  A load with a second harmonic beside the first (a shell's "
+                  "ovality) is its 'two_harmonic' form, tried in the final check in place of another selected "
+                  "effect.",
+            forms=(Form("two_harmonic",
+                        "a kiln load periodic in the kiln angle with a second harmonic beside the first (a shell's "
+                        "ovality, two eccentric masses): T_unb sin(theta_o + phi_unb) + T_unb2 sin(2 theta_o + "
+                        "phi_unb2)",
+                        ("kiln_unbalance", "kiln_second_harmonic"),
+                        (FreeParameter("T_unb2", 0.0, 2e7, "polar", 1e5, partner="phi_unb2"),),
+                        near={"T_unb2": 0.0, "phi_unb2": 0.0},
+                        # the second harmonic at half the first's amplitude, in four phases
+                        starts=lambda v: [{"T_unb2": 0.5 * v["T_unb"], "phi_unb2": k * math.pi / 2}
+                                          for k in range(4)],
+                        # no second harmonic is the effect's own form, not a stand-in's bound
+                        ends={"T_unb2": "lower"},
+                        # over a start-up of 40 s (a third of a revolution) a second harmonic is a slow drift
+                        # like the first: in the rounds it would fit the noise; in the final check it must take
+                        # the place of a selected effect
+                        in_rounds=False),)),
     )
     requires = ("kiln",)
 
@@ -218,7 +236,8 @@ class KilnSecondHarmonic(Component):
 
     Torque -T_unb2*sin(2 theta_o + phi_unb2) on the kiln, on the kiln angle ``theta_o`` that
     :class:`KilnUnbalance` integrates: the second harmonic of a kiln-angle-periodic load whose first is the
-    unbalance.  Not a catalogue effect of its own: add it with ``kiln_unbalance`` (``--effects
+    unbalance.  Not a catalogue effect of its own: the ``two_harmonic`` form of ``kiln_unbalance`` (tried in
+    the diagnosis' final check); add it with ``kiln_unbalance`` (``--effects
     kiln_unbalance,kiln_second_harmonic``) to compare or simulate a load of two harmonics.
     """
 
