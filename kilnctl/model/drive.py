@@ -121,6 +121,18 @@ class PID(Component):
         e.add_output("e_a", e.sig["e_a"])
 
 
+def _sliding_at_limit(cycle) -> str | None:
+    """The sliding mode of a limit with anti-windup (the voltage or the current limit) that resolves a cycle of
+    its modes without time passing: ``slide_upper`` when free running alternates with the upper limit,
+    ``slide_lower`` with the lower one, None for any other cycle."""
+    if "free" in cycle:
+        if "upper" in cycle or "slide_upper" in cycle:
+            return "slide_upper"
+        if "lower" in cycle or "slide_lower" in cycle:
+            return "slide_lower"
+    return None
+
+
 @register
 class VoltageLimit(Component):
     """Armature-voltage limit of the drive, with anti-windup.
@@ -186,12 +198,7 @@ class VoltageLimit(Component):
 
     def sliding_mode(self, cycle):
         """Sliding at the limit when the clamp and free running would alternate without time passing."""
-        if "free" in cycle:
-            if "upper" in cycle or "slide_upper" in cycle:
-                return "slide_upper"
-            if "lower" in cycle or "slide_lower" in cycle:
-                return "slide_lower"
-        return None
+        return _sliding_at_limit(cycle)
 
 
 @register
@@ -365,9 +372,4 @@ class CurrentLimit(Component):
 
     def sliding_mode(self, cycle):
         """Sliding at the limit when the limit and free running would alternate without time passing."""
-        if "free" in cycle:
-            if "upper" in cycle or "slide_upper" in cycle:
-                return "slide_upper"
-            if "lower" in cycle or "slide_lower" in cycle:
-                return "slide_lower"
-        return None
+        return _sliding_at_limit(cycle)
