@@ -949,7 +949,13 @@ class Diagnosis:
         contradict its own signature (:attr:`~kilnctl.model.catalogue.Effect.contradicts`, as the rounds
         require of every candidate: a drive train so damped that it cannot ring) is weak too, however much it
         lowers the BIC: the final fit, from other starts, can end where the rounds would have refused it (red
-        team 4's second-order speed filter: a compliance of damping ratio about 480).  The effect with the
+        team 4's second-order speed filter: a compliance of damping ratio about 480).  The structure without
+        an effect is refitted with the others in their own forms and, for each of them that has other forms
+        (:attr:`~kilnctl.model.catalogue.Effect.forms`, those the rounds do not try included), with it in each
+        (:meth:`_rest_forms`; a form whose added parameter ends at a bound excepted): the refit of lowest BIC
+        judges the effect, and when it is a form's, the effect is removed for it and that one takes the form
+        (red team 6's r5: a motor Coulomb friction of 244 N m stood in for a kiln load's second harmonic;
+        without it, with the unbalance in its two_harmonic form, BIC fell by 461).  The effect with the
         weakest evidence is removed, the refit without it is the final model, and the check repeats.
 
         Returns
