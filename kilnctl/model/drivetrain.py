@@ -13,16 +13,13 @@ import math
 import casadi as ca
 import numpy as np
 
-from ..params import param
+from ..params import Parameters, param
 from .base import Component, Guard, register
 from .catalogue import Effect, Form, FreeParameter
 
 #: scale of the mesh deflection in guards [m]
 DS_SCALE = 1e-4
 
-
-#: motor inertia the backlash's ``coupling`` form sets its starting damping on (Table 1's J_m) [kg*m^2]
-J_M_NOMINAL = 21.5
 
 #: a fitted drive train damped at or above this ratio of its torsional mode has no ring to show (a step response
 #: overshoots by less than 5 %) [-]
@@ -307,8 +304,8 @@ class Mesh(Component):
                         # at the setup's k_c and c_c the form is the effect's own
                         near={},
                         # a stiffer link in three decades, damped at 0.1, 0.3 and 1 of its mode on the motor
-                        # (c = 2 zeta sqrt(k J_m))
-                        starts=lambda v: [{"k_c": k, "c_c": 2.0 * z * math.sqrt(k * J_M_NOMINAL)}
+                        # (c = 2 zeta sqrt(k J_m), Table 1's J_m: starting points only)
+                        starts=lambda v: [{"k_c": k, "c_c": 2.0 * z * math.sqrt(k * Parameters().J_m)}
                                           for k in (1e6, 1e7, 1e8) for z in (0.1, 0.3, 1.0)],
                         # a drive with no compliant coupling behind the play (a plant with a stiff link): the
                         # fit may take either to its upper bound, where the coupling is rigid
