@@ -81,7 +81,8 @@ def holdout_masks(measurement: Measurement, kind: str = "blocks", fraction: floa
     """
     t = measurement.t
     start = t[0] if t0 is None else t0
-    active = t >= start - 1e-9
+    # samples at a level the logger clipped a channel at are in neither part (Measurement.unclipped)
+    active = (t >= start - 1e-9) & _unclipped(measurement)
     span = t[-1] - start
     rel = (t - start) / span if span > 0 else np.zeros_like(t)
     if kind == "tail":
@@ -93,6 +94,12 @@ def holdout_masks(measurement: Measurement, kind: str = "blocks", fraction: floa
     else:
         raise ModelError(f"unknown hold-out kind {kind!r}: choose 'blocks' or 'tail'")
     return active & ~test, test
+
+
+def _unclipped(measurement) -> np.ndarray:
+    """The record's samples where no channel is clipped (all, for a record built without the check)."""
+    keep = getattr(measurement, "unclipped", None)
+    return np.ones(measurement.t.size, bool) if keep is None else keep
 
 
 def bic(rss: dict, n: dict, k: int) -> float:
@@ -221,7 +228,7 @@ class _Problem:
         self.model = model
         self.effects = tuple(effects)
         active = measurement.t >= experiment.t0 - 1e-9
-        self.mask = (mask if mask is not None else np.ones(measurement.n, bool))[active]
+        self.mask = ((mask if mask is not None else np.ones(measurement.n, bool)) & _unclipped(measurement))[active]
         self.meas = {c: measurement.channels[c][active] for c in CHANNELS}
         self.scales = scales
         self.walls: list[float] = []
@@ -891,6 +898,7 @@ class Calibration:
         if isinstance(self.scales, dict):
             return {c: float(self.scales[c]) for c in CHANNELS}
         out = {}
+        active = active & _unclipped(measurement)
         for c in CHANNELS:
             s = float(np.std(measurement.channels[c][active]))
             out[c] = s if s > 0 else 1.0
@@ -1153,7 +1161,7 @@ class Calibration:
         m = self.measurement_ if measurement is None else measurement
         exp = self.experiment_ if m is self.measurement_ else m.experiment(self.params_, t0=self.t0)
         active = m.t >= exp.t0 - 1e-9
-        sel = (np.ones(m.n, bool) if mask is None else np.asarray(mask, bool))[active]
+        sel = ((np.ones(m.n, bool) if mask is None else np.asarray(mask, bool)) & _unclipped(m))[active]
         out = self.predict(m)
         e = np.concatenate([(m.channels[c][active][sel] - out[c][sel]) / self.scales_[c] for c in CHANNELS])
         y = np.concatenate([(m.channels[c][active][sel] - m.channels[c][active][sel].mean()) / self.scales_[c]

@@ -89,9 +89,12 @@ class ChannelComparison:
     name, unit : str
         Column name and unit.
     measured, model, residual : ndarray
-        Signals at the compared times; residual = measured - model.
+        Signals at the compared times; residual = measured - model, 0 on
+        samples the logger clipped (:attr:`Measurement.unclipped
+        <kilnctl.measure.io.Measurement.unclipped>`: no measurement there).
     fit : float
-        Fit % (MATLAB ``compare``).
+        Fit % (MATLAB ``compare``), over the samples not clipped, as are
+        ``bias``, ``rms`` and ``sigma``.
     bias : float
         Mean residual [unit] (positive: model low).
     rms : float
@@ -431,16 +434,17 @@ def compare_run(measurement: Measurement, run: ModelRun, experiment: Experiment,
     u = measurement.speed_ref[active] if measurement.speed_ref is not None else run.outputs["speed_ref_rpm"]
     phases = _phases(run, experiment.t0, float(t[-1]))
     chans = {}
+    ok = measurement.unclipped[active]  # fit %, bias and rms leave out samples the logger clipped
     for k, (_name, unit) in CHANNELS.items():
         y, yhat = meas[k], run.outputs[k]
-        e = y - yhat
+        e = np.where(ok, y - yhat, 0.0)  # a clipped sample is no measurement: no residual
         others = {"speed_ref_rpm (input)": u}
         others.update({f"{o} (measured)": meas[o] for o in CHANNELS if o != k})
         xc = {label: crosscorr(e, sig, max_lag, t=t) for label, sig in others.items()}
         fails = [_describe(t, y, yhat, e, a, b, unit, phases) for a, b in failing_intervals(t, e)]
         chans[k] = ChannelComparison(
-            name=k, unit=unit, measured=y, model=yhat, residual=e, fit=fit_percent(y, yhat),
-            bias=float(np.mean(e)), rms=float(np.sqrt(np.mean(e ** 2))), sigma=robust_sigma(e),
+            name=k, unit=unit, measured=y, model=yhat, residual=e, fit=fit_percent(y[ok], yhat[ok]),
+            bias=float(np.mean(e[ok])), rms=float(np.sqrt(np.mean(e[ok] ** 2))), sigma=robust_sigma(e[ok]),
             whiteness=autocorr(e, max_lag, t=t), xcorr=xc, spectrum=residual_spectrum(e, t=t), failing=fails)
     extra = {"kiln_angle": kiln_angle(t, meas["speed_rpm"], (params or Parameters()).n),
              "model_outputs": run.outputs}

@@ -399,7 +399,7 @@ class Diagnosis:
         """End of the first failing interval of a calibrated model, + 1 s, as a fraction of the record."""
         active = m.t >= exp.t0 - 1e-9
         t = m.t[active]
-        e = m.current[active] - cal.run_.outputs["current_A"]
+        e = np.where(m.unclipped[active], m.current[active] - cal.run_.outputs["current_A"], 0.0)
         iv = failing_intervals(t, e)
         if not iv:
             return None
@@ -448,7 +448,7 @@ class Diagnosis:
         active = m.t >= exp.t0 - 1e-9
         scales = {}
         for c in CHANNELS:
-            e = m.channels[c][active] - base.run_.outputs[c]
+            e = (m.channels[c][active] - base.run_.outputs[c])[m.unclipped[active]]
             scales[c] = max(float(np.sqrt(np.mean(e ** 2))), 1e-3 * float(np.std(m.channels[c][active])), 1e-12)
         train, test = holdout_masks(m, self.holdout, self.holdout_fraction, t0=exp.t0)
         self.scales_, self.train_, self.test_ = scales, train, test

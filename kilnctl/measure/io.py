@@ -34,6 +34,7 @@ from ..errors import ConfigFileError, DataError, ParameterError, close_matches_h
 from ..files import read_toml
 from ..params import GROUPS, SPECS, Parameters
 from ..units import RPM_PER_RAD_S
+from .clipping import clipped_levels, clipped_notes, unclipped
 from .reference import fit_scurve
 from .stats import robust_sigma
 
@@ -133,6 +134,10 @@ class Measurement:
     row_word : str
         What ``lines`` counts: ``line`` (text file), ``row`` (spreadsheet,
         Parquet) or ``sample`` (MATLAB file, arrays).
+    clipped : tuple of ClipLevel
+        Channels the logger clipped at the end of its range
+        (:func:`~kilnctl.measure.clipping.clipped_levels`); their samples at
+        the level are left out of fits, evidence and fit % (:attr:`unclipped`).
     """
 
     t: np.ndarray
@@ -141,6 +146,7 @@ class Measurement:
     lines: np.ndarray | None = None
     notes: tuple = ()
     row_word: str = "line"
+    clipped: tuple = ()
 
     # --- construction ---------------------------------------------------------
     @classmethod
@@ -205,6 +211,13 @@ class Measurement:
     def speed_ref(self) -> np.ndarray | None:
         """Speed reference [rpm], or None if not recorded."""
         return self.channels.get("speed_ref_rpm")
+
+    @property
+    def unclipped(self) -> np.ndarray:
+        """Mask of the samples where no channel sits at a level the logger clipped it at (:attr:`clipped`):
+        the samples fits, evidence and fit % use."""
+        keep = unclipped(self.clipped, self.channels)
+        return np.ones(self.t.size, bool) if keep is None else keep
 
     @property
     def n(self) -> int:
@@ -995,11 +1008,21 @@ def _checked(arrays, lines, source, params, notes, row_word, labels=None, log=Fa
     _check_time_scale(t, med, source, labels.get("time_s", "'time_s'"), params, math.inf if log else MAX_RECORD_S,
                       time_name, arrays.get("speed_rpm"))
     _check_units(arrays, lines, source, params, row_word, labels, log)
+    clipped = ()
     if not log:
+        clipped = tuple(clipped_levels(arrays, params.I_max))
+        kept = unclipped(clipped, arrays)
+        if kept is not None and kept.sum() < MIN_SAMPLES:
+            c = max(clipped, key=lambda c: c.n)
+            raise DataError(f"{source}: {int(n - kept.sum())} of {n} samples sit at a level the logger clipped "
+                            f"a channel at (column {labels.get(c.channel) or repr(c.channel)} at {c.level:.6g}): "
+                            f"fewer than {MIN_SAMPLES} samples are left to compare a model with; log the channel "
+                            "with a wider range")
         notes = tuple(notes) + tuple(_sampling_notes(t, dts, med, lines, row_word)) \
             + tuple(_spike_notes(arrays, lines, row_word, labels)) + tuple(_frozen_notes(t, arrays, lines, row_word)) \
-            + tuple(_resampled_notes(t, arrays, med))
-    return Measurement(t=t, channels=arrays, source=source, lines=lines, notes=tuple(notes), row_word=row_word)
+            + tuple(_resampled_notes(t, arrays, med)) + tuple(clipped_notes(clipped, arrays, t, lines, row_word, labels))
+    return Measurement(t=t, channels=arrays, source=source, lines=lines, notes=tuple(notes), row_word=row_word,
+                       clipped=clipped)
 
 
 def _sampling_notes(t, dts, med, lines, row_word) -> list[str]:
