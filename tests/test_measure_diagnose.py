@@ -10,6 +10,7 @@ import json
 import math
 from types import SimpleNamespace
 
+import numpy as np
 import pytest
 
 from kilnctl import Parameters
@@ -1179,3 +1180,51 @@ def test_diagnosis_given_one_string_of_candidates_or_calibrate_names_the_argumen
         Diagnosis(candidates="second_motor")
     with pytest.raises(KilnctlError, match=r"calibrate = 'mu_c' must be a list of names"):
         Diagnosis(calibrate="mu_c")
+
+
+def _speed_comparison(shift_samples, seed=0):
+    """A comparison stand-in: a 74 rpm/s ramp to 500 rpm and its hold at 50 Hz as the model's speed, the
+    measured one the same signal ``shift_samples`` later (earlier when negative) plus 0.3 rpm of white noise."""
+    t = np.arange(0.0, 30.0, 0.02)
+    model = np.clip(74.0 * (t - 1.0), 0.0, 500.0)
+    measured = np.clip(74.0 * (t - 1.0 - 0.02 * shift_samples), 0.0, 500.0) \
+        + np.random.default_rng(seed).normal(0.0, 0.3, t.size)
+    return SimpleNamespace(t=t, channels={"speed_rpm": SimpleNamespace(measured=measured, model=model)})
+
+
+@pytest.mark.parametrize("shift_samples", [2, -3])
+def test_a_speed_logged_later_or_earlier_than_the_model_is_named_with_its_shift(shift_samples):
+    # truth by construction: the measured speed is the model's shifted by whole samples of 20 ms; unshifted,
+    # the residual on the ramp is 74 rpm/s x the shift (1.48 rpm for 20 ms) over 7 s of the 30, its RMS
+    # sqrt(7/30) x 74 x 0.02 k plus the noise; at the shift, the noise's 0.3 rpm
+    from kilnctl.measure.cautions import best_shift, skew_texts
+
+    comp = _speed_comparison(shift_samples)
+    shift, rms_best, rms_0 = best_shift(comp.t, comp.channels["speed_rpm"].measured,
+                                        comp.channels["speed_rpm"].model)
+    assert shift == pytest.approx(0.02 * shift_samples)
+    assert rms_best == pytest.approx(0.3, rel=0.1)
+    ramp = math.sqrt(7.0 / 30.0) * 74.0 * 0.02 * abs(shift_samples)
+    assert rms_0 == pytest.approx(math.hypot(ramp, 0.3), rel=0.1)
+    (text,) = skew_texts(comp, ())
+    ms = 20 * abs(shift_samples)
+    if shift_samples > 0:
+        assert text.startswith(f"the measured speed trails the final model's by {ms} ms") and \
+            f"the speed logged {ms} ms after the current" in text and "speed_sensor_lag (not selected)" in text
+        (text,) = skew_texts(comp, ("speed_sensor_lag",))
+        assert "the speed_sensor_lag selected does not account for it" in text
+    else:
+        assert text.startswith(f"the measured speed leads the final model's by {ms} ms") and \
+            f"the speed logged {ms} ms before the current" in text and "speed_sensor_lag" not in text
+
+
+def test_no_skew_caution_when_the_speed_matches_unshifted():
+    # truth by construction: the same signals without a shift; and a 1-sample shift under 3 rpm of noise,
+    # which moves the RMS by under a per cent, is not worth a caution either
+    from kilnctl.measure.cautions import skew_texts
+
+    assert skew_texts(_speed_comparison(0), ()) == []
+    noisy = _speed_comparison(1)
+    noisy.channels["speed_rpm"].measured = noisy.channels["speed_rpm"].model + \
+        np.random.default_rng(1).normal(0.0, 3.0, noisy.t.size)
+    assert skew_texts(noisy, ()) == []

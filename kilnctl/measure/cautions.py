@@ -1,6 +1,8 @@
 """The cautions a diagnosis gives with its result: what weakens the evidence for what it selected.
 
 - :func:`setup_cautions`: the setup's own model misses a channel's level (a unit or setup mismatch);
+- :func:`skew_texts`: the measured speed matches the final model's best shifted in time (the logger's
+  channels skewed, or a lag in the speed's sensor);
 - :func:`effect_cautions`: per selected effect, a record shorter than its period or evidence weak once the
   residual's autocorrelation is allowed for (:func:`caution_texts`), a rival the record hardly tells apart
   (:func:`rival_texts`), values outside the usual range; and base values far from the setup's
@@ -13,6 +15,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from ..errors import KilnctlError
 from .compare import level_caution
 from .effects import CATALOGUE
@@ -20,8 +24,8 @@ from .evidence import close_rival
 from .report import listed, unit_of as _unit
 from .runner import CHANNELS, run_model
 
-__all__ = ["setup_cautions", "effect_cautions", "drift_texts", "rival_texts", "caution_texts", "DRIFT_CHECKED",
-           "SETUP_DRIFT"]
+__all__ = ["setup_cautions", "effect_cautions", "drift_texts", "rival_texts", "caution_texts", "skew_texts",
+           "best_shift", "DRIFT_CHECKED", "SETUP_DRIFT", "SKEW_MAX_S", "SKEW_GAIN"]
 
 #: the final model's base values checked against the setup's, and the fraction [-] beyond which a caution says
 #: so (mu_s is left out: outside stick-slip only the breakaway shows it, and it is fitted loosely)
@@ -59,6 +63,83 @@ def setup_cautions(m, params, exp, model: str = "macro") -> list[str]:
     texts = [level_caution(c, unit, m.channels[c][active], run.outputs[c]) for c, (_, unit) in CHANNELS.items()]
     return [f"the setup's model before calibration, {text} Until that is resolved, the diagnosis below is not "
             f"evidence of an effect." for text in texts if text is not None]
+
+
+#: shifts of the measured speed against the model tried, up to this many seconds either way [s] ...
+SKEW_MAX_S = 0.2
+#: ... and the speed residual's RMS at the best shift must fall below this fraction of its RMS unshifted [-]
+SKEW_GAIN = 0.7
+
+
+def best_shift(t, measured, model, max_s: float = SKEW_MAX_S) -> tuple[float, float, float]:
+    """The time shift of a measured signal against a model's that fits them best, in whole samples.
+
+    Shift k (samples): the measured sample i is compared with the model's sample i - k, so k > 0 means the
+    measured signal comes k samples *after* the model's.  All shifts are compared over the same samples.
+
+    Parameters
+    ----------
+    t : ndarray
+        Sample times [s] (an even grid; its median step is used).
+    measured, model : ndarray
+        The two signals at ``t``.
+    max_s : float, default SKEW_MAX_S
+        Largest shift tried either way [s].
+
+    Returns
+    -------
+    (float, float, float)
+        The best shift [s], the residual's RMS there and unshifted (in the signals' unit).
+    """
+    y, yhat = np.asarray(measured, float), np.asarray(model, float)
+    dt = float(np.median(np.diff(t)))
+    kmax = int(min(round(max_s / dt), (y.size - 1) // 4))
+    if kmax < 1:
+        return 0.0, math.nan, math.nan
+    window = slice(kmax, y.size - kmax)
+    rms = {k: float(np.sqrt(np.mean((y[window] - yhat[kmax - k: y.size - kmax - k]) ** 2)))
+           for k in range(-kmax, kmax + 1)}
+    k = min(rms, key=rms.get)
+    return k * dt, rms[k], rms[0]
+
+
+def skew_texts(comparison, selected=()) -> list[str]:
+    """A caution when the measured speed matches the final model's far better shifted in time.
+
+    The logger's channels may be skewed (the speed sampled or stamped later than the current: two loggers, a
+    bus delay), or the speed's sensor may lag.  Neither is told from the record by the rounds: a skew is
+    no effect of the plant, and the catalogue's ``speed_sensor_lag`` delays the speed the controller sees
+    too.  Named when the best shift within :data:`SKEW_MAX_S` brings the speed residual's RMS below
+    :data:`SKEW_GAIN` of its unshifted value (:func:`best_shift`).  (Red team 7: the speed logged 40 ms after
+    the current, a ramp of 74 rpm/s: the speed 2.9 rpm behind the model's for the whole ramp, a compliance
+    lost, nothing said.)
+
+    Parameters
+    ----------
+    comparison : Comparison
+        The final model's comparison with the record.
+    selected : sequence of str
+        The effects selected (named in the text).
+
+    Returns
+    -------
+    list of str
+        At most one caution.
+    """
+    ch = comparison.channels["speed_rpm"]
+    shift, rms_best, rms_0 = best_shift(comparison.t, ch.measured, ch.model)
+    if shift == 0.0 or not rms_best < SKEW_GAIN * rms_0:
+        return []
+    ms = 1000.0 * abs(shift)
+    trails = shift > 0
+    lag = ("; the speed_sensor_lag selected does not account for it" if "speed_sensor_lag" in selected else
+           "; a lag of the speed's own sensor, which the controller sees too, is the catalogue's "
+           "speed_sensor_lag (not selected)" if trails else "")
+    return [f"the measured speed {'trails' if trails else 'leads'} the final model's by {ms:.0f} ms: shifted by "
+            f"that much, its residual falls from {rms_0:.2g} to {rms_best:.2g} rpm RMS. The logger's channels may "
+            f"be skewed (the speed logged {ms:.0f} ms {'after' if trails else 'before'} the current){lag}. "
+            "Effects fitted to a skewed record stand in for the skew: align the channels if they are, and "
+            "diagnose again"]
 
 
 def effect_cautions(d, m, exp, params) -> list[str]:

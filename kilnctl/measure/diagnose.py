@@ -52,7 +52,7 @@ from .calibrate import Calibration, Smoothing, default_starts, holdout_masks
 from .compare import compare_run
 from .effects import CATALOGUE, DEFAULT_CALIBRATE, effect_components, grid_starts
 from .breakaways import breakaways
-from .cautions import caution_texts, effect_cautions, setup_cautions
+from .cautions import caution_texts, effect_cautions, setup_cautions, skew_texts
 from .io import Measurement
 from .evidence import CandidateResult, close_rival, judge
 from .oscillation import dominant_oscillation, matching_value
@@ -586,7 +586,8 @@ class Diagnosis:
                                      sources=["outside_change"] + ["residual"] * bool(self.unexplained_),
                                      outside_change={k: v for k, v in change.items() if k != "text"},
                                      text=f"{change['text']}. The model's {self.signature_['described']}.")
-        self.caveats_ = list(self.setup_cautions_) + effect_cautions(self, m, exp, params) + form_notes
+        self.caveats_ = list(self.setup_cautions_) + effect_cautions(self, m, exp, params) + form_notes \
+            + skew_texts(self.comparison_final_, selected)
         self.standstill_ = standstill_offsets(m, exp, residuals={k: ch.residual for k, ch in
                                                                  self.comparison_final_.channels.items()})
         if self.standstill_:
