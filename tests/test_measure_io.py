@@ -447,3 +447,21 @@ def test_a_record_resampled_from_a_coarser_logger_is_named():
         assert not any("noise-free" in n for n in r.notes)
     assert resampled_every(m.current) is None and resampled_every(np.round(m.current / 10.0) * 10.0) is None
     assert not any("resampled" in n for n in m.notes)
+
+
+def test_a_speed_counted_by_a_coarse_encoder_is_named_with_its_step():
+    # truth by construction: a 1024-count encoder read every 20 ms gives the speed in whole steps of
+    # 60 / (1024 x 0.02) = 2.9297 rpm; the noisy speed it counted is not quantised, nor is a current on 10 A steps
+    from kilnctl.measure.io import speed_step
+    from kilnctl.measure.synthetic import DEFAULT_GAINS, make_record
+
+    m, _ = make_record(seed=4, t_end=20.0, mismatch=())
+    step = 60.0 / (1024 * 0.02)
+    counted = np.round(m.speed / step) * step
+    q = Measurement.from_arrays(m.t, m.current, counted, m.speed_ref, params=Parameters(DEFAULT_GAINS))
+    note = next(n for n in q.notes if "speed is logged in steps" in n)
+    assert "steps of 2.93 rpm" in note and speed_step(counted) == pytest.approx(step, rel=1e-9)
+    assert speed_step(m.speed) is None
+    coarse_current = Measurement.from_arrays(m.t, 10.0 * np.round(m.current / 10.0), m.speed, m.speed_ref,
+                                             params=Parameters(DEFAULT_GAINS))
+    assert not any("logged in steps" in n for n in coarse_current.notes)

@@ -1020,7 +1020,8 @@ def _checked(arrays, lines, source, params, notes, row_word, labels=None, log=Fa
                             "with a wider range")
         notes = tuple(notes) + tuple(_sampling_notes(t, dts, med, lines, row_word)) \
             + tuple(_spike_notes(arrays, lines, row_word, labels)) + tuple(_frozen_notes(t, arrays, lines, row_word)) \
-            + tuple(_resampled_notes(t, arrays, med)) + tuple(clipped_notes(clipped, arrays, t, lines, row_word, labels))
+            + tuple(_resampled_notes(t, arrays, med)) + tuple(clipped_notes(clipped, arrays, t, lines, row_word, labels)) \
+            + tuple(_speed_step_notes(arrays) if resampled_every(arrays.get("current_A")) is None else ())
     return Measurement(t=t, channels=arrays, source=source, lines=lines, notes=tuple(notes), row_word=row_word,
                        clipped=clipped)
 
@@ -1146,6 +1147,52 @@ def resampled_every(current) -> int | None:
             if np.max(np.bincount(bends % k, minlength=k)) >= 0.9 * bends.size:
                 return k
     return None
+
+
+#: a speed logged in steps of at least this many rpm is named (:func:`speed_step`) [rpm]
+SPEED_STEP_RPM = 0.2
+
+
+def speed_step(speed) -> float | None:
+    """The step a logged speed is quantised in (an encoder's counts per sample interval), or None.
+
+    A measured speed from a tachometer or a fine encoder changes on every sample; one counted by a coarse
+    encoder over a sample interval repeats its value on many samples and moves in whole steps (1024 counts
+    per revolution read every 20 ms: 2.93 rpm).  Judged: at least 10 % of the changes are zero, and 90 %
+    of the others lie within 5 % of a whole multiple of the step (the 10th percentile of their sizes),
+    which is at least :data:`SPEED_STEP_RPM`.
+
+    Parameters
+    ----------
+    speed : ndarray
+        The logged speed [rpm].
+
+    Returns
+    -------
+    float or None
+        The step [rpm].
+    """
+    d = np.abs(np.diff(np.asarray(speed, float)))
+    if d.size < 50:
+        return None
+    moving = d[d > 1e-9 * (float(np.max(np.abs(speed))) or 1.0)]
+    if moving.size < 10 or moving.size > 0.9 * d.size:
+        return None
+    q = float(np.percentile(moving, 10))
+    r = moving / q
+    if q < SPEED_STEP_RPM or np.mean(np.abs(r - np.round(r)) < 0.05) < 0.9:
+        return None
+    return float(np.median(moving[np.round(r) == 1]))
+
+
+def _speed_step_notes(arrays) -> list[str]:
+    """Say when the speed is logged in coarse steps (:func:`speed_step`)."""
+    q = speed_step(arrays.get("speed_rpm"))
+    if q is None:
+        return []
+    return [f"the speed is logged in steps of {q:.3g} rpm (a coarse encoder counted over each sample?): "
+            "detail smaller than a step is not in the record, so an effect seen only in the speed's detail "
+            "(a drive train's ringing of a few rpm) may go unseen; log the speed finer if you can"]
 
 
 #: largest factor of resampling :func:`resampled_every` names
