@@ -465,3 +465,6 @@ def test_a_speed_counted_by_a_coarse_encoder_is_named_with_its_step():
     coarse_current = Measurement.from_arrays(m.t, 10.0 * np.round(m.current / 10.0), m.speed, m.speed_ref,
                                              params=Parameters(DEFAULT_GAINS))
     assert not any("logged in steps" in n for n in coarse_current.notes)
+    # nor is a speed without noise, a straight ramp and its hold (one change per sample, then none)
+    t, _, w, _ = _rows(n=400, dt=0.02)
+    assert speed_step(np.round(w, 3)) is None

@@ -1158,9 +1158,10 @@ def speed_step(speed) -> float | None:
 
     A measured speed from a tachometer or a fine encoder changes on every sample; one counted by a coarse
     encoder over a sample interval repeats its value on many samples and moves in whole steps (1024 counts
-    per revolution read every 20 ms: 2.93 rpm).  Judged: at least 10 % of the changes are zero, and 90 %
-    of the others lie within 5 % of a whole multiple of the step (the 10th percentile of their sizes),
-    which is at least :data:`SPEED_STEP_RPM`.
+    per revolution read every 20 ms: 2.93 rpm).  Judged: at least 10 % of the changes are zero, in at least
+    10 separate stretches (the counts flicker between steps; a speed without noise does not), and 90 % of
+    the others lie within 5 % of a whole multiple of the step (the 10th percentile of their sizes), which
+    is at least :data:`SPEED_STEP_RPM`.
 
     Parameters
     ----------
@@ -1175,8 +1176,12 @@ def speed_step(speed) -> float | None:
     d = np.abs(np.diff(np.asarray(speed, float)))
     if d.size < 50:
         return None
-    moving = d[d > 1e-9 * (float(np.max(np.abs(speed))) or 1.0)]
-    if moving.size < 10 or moving.size > 0.9 * d.size:
+    still = d <= 1e-9 * (float(np.max(np.abs(speed))) or 1.0)
+    moving = d[~still]
+    # the counts flicker between steps: many separate stretches without a change (a speed without noise, a
+    # straight ramp and its hold, changes by one amount and then not at all: one stretch)
+    stretches = int(np.sum(still[1:] & ~still[:-1])) + int(still[0])
+    if moving.size < 10 or moving.size > 0.9 * d.size or stretches < 10:
         return None
     q = float(np.percentile(moving, 10))
     r = moving / q
