@@ -68,6 +68,9 @@ __all__ = ["Diagnosis", "CandidateResult", "residual_signature", "caution_texts"
 #: a refit of the current structure from a candidate's base values replaces the current model when it lowers
 #: the cost by more than this fraction [-] (see Diagnosis._reanchor)
 REANCHOR_GAIN = 1e-3
+#: how many times a round is refitted from a re-anchored model, at most (each time the refitted round moved the
+#: current model again by more than the BIC threshold)
+REANCHOR_ROUNDS = 3
 #: the effect tried together with each other candidate when no single one is supported but the record shows
 #: stick-slip falls the model lacks: its cycles and a second effect can hide each other (a current limit that
 #: clips the cycles' peaks, a compliance that rings after each fall)
@@ -433,6 +436,7 @@ class Diagnosis:
         wall0 = time.perf_counter()
         self._forms = {}
         self.form_results_ = []
+        self.reanchor_rounds_ = 0  # rounds refitted from a re-anchored model
         self.checks_ = []
         params = resolve_gains(self.params)
         exp = measurement.experiment(params, t0=self.t0)
@@ -498,17 +502,27 @@ class Diagnosis:
             if anchored is not current and n_fit * math.log(current.cost_ / anchored.cost_) > self.min_delta_bic:
                 # the current structure reached a better valley from a candidate's base values: every candidate
                 # was refitted from the old one (its effect then bought an escape from that valley, which the
-                # evidence would credit it with), so the round is refitted from the new model, once, when the
-                # escape alone would count as evidence (n ln(cost ratio) above the BIC threshold)
+                # evidence would credit it with), so the round is refitted from the new model when the escape
+                # alone would count as evidence (n ln(cost ratio) above the BIC threshold); and again, up to
+                # REANCHOR_ROUNDS times, when the refitted round re-anchors it that far once more (red team 5's
+                # g3: 729 -> 721 -> 526.5 after the first refit; every candidate, refitted from 729's values,
+                # then lost to the new model, the unbalance among them, and the fit ended at 93.4 %)
                 current = anchored
-                say("  candidates refitted from the re-anchored model")
-                results = self._try_all(m, params, selected, names, current, scales, train, test, exp, pool, say,
-                                        before)
-                results = self._in_best_form(m, params, selected, results, current, scales, train, test, exp,
-                                             pool, say)
-                results.sort(key=_rank)
-                current, results = self._reanchor(m, params, selected, current, results, scales, train, test, exp,
-                                                  say)
+                for _ in range(REANCHOR_ROUNDS):
+                    say("  candidates refitted from the re-anchored model")
+                    self.reanchor_rounds_ += 1
+                    results = self._try_all(m, params, selected, names, current, scales, train, test, exp, pool,
+                                            say, before)
+                    results = self._in_best_form(m, params, selected, results, current, scales, train, test, exp,
+                                                 pool, say)
+                    results.sort(key=_rank)
+                    anchored, results = self._reanchor(m, params, selected, current, results, scales, train, test,
+                                                       exp, say)
+                    far = anchored is not current and (sum(anchored.n_.values())
+                                                       * math.log(current.cost_ / anchored.cost_) > self.min_delta_bic)
+                    current = anchored
+                    if not far:
+                        break
             change = self._outside(m, params, selected, current, results, scales, train, test, exp, say)
             rounds.append(results)
             pairs = None
@@ -557,7 +571,7 @@ class Diagnosis:
             final = self._final_fit(m, params, tuple(selected), current, exp, pool, base)
         else:
             final = base
-        self.final_search_ = _search_summary(final)
+        self.final_search_ = dict(_search_summary(final), reanchor_rounds=self.reanchor_rounds_)
         final, form_notes = self._final_forms(m, params, tuple(selected), final, exp, say)
         selected, final, dropped = self._final_check(m, params, selected, final, scales, train, test, exp, say,
                                                      pool)
