@@ -1228,3 +1228,47 @@ def test_no_skew_caution_when_the_speed_matches_unshifted():
     noisy.channels["speed_rpm"].measured = noisy.channels["speed_rpm"].model + \
         np.random.default_rng(1).normal(0.0, 3.0, noisy.t.size)
     assert skew_texts(noisy, ()) == []
+
+
+@pytest.mark.parametrize("costs, refits", [
+    ([729.0, 526.5, 526.4], 2),   # red team 5's g3: the refitted round moved the model far again, then stayed
+    ([729.0, 728.9], 1),          # a move too small to count as evidence: one refit, as before
+    ([700.0, 600.0, 500.0, 400.0, 300.0], 3),  # at most REANCHOR_ROUNDS refits
+])
+def test_a_round_is_refitted_while_re_anchoring_moves_the_model_far(costs, refits):
+    # truth by construction: n ln(cost ratio) against the BIC threshold 10, worked out by hand for n = 1000
+    # samples: 729 -> 526.5 is 325 (far), 526.5 -> 526.4 is 0.19 (not), 729 -> 728.9 is 0.14.  The round's
+    # candidates are each time refitted from the latest model, and the results returned are the last re-anchoring's.
+    # The calibrations are stand-ins: only the loop's logic is tested
+    import math
+
+    from kilnctl.measure.diagnose import REANCHOR_ROUNDS
+
+    assert REANCHOR_ROUNDS == 3
+    d = Diagnosis(SETUP)
+    d.reanchor_rounds_ = 0
+    models = [SimpleNamespace(cost_=c, n_={"current_A": 1000}) for c in costs]
+    refitted_from = []
+
+    def result(text):
+        return SimpleNamespace(text=text, supported=True, delta_bic=-20.0)
+
+    def try_all(m, params, selected, names, current, *a):
+        refitted_from.append(current.cost_)
+        return [result(f"results from {current.cost_}")]
+
+    def reanchor(m, params, selected, current, results, *a):
+        i = models.index(current)
+        nxt = models[i + 1] if i + 1 < len(models) else current
+        return nxt, results + [result(f"judged against {nxt.cost_}")]
+
+    d._try_all = try_all
+    d._in_best_form = lambda m, params, selected, results, *a: results
+    d._reanchor = reanchor
+    assert d._moved_far(SimpleNamespace(cost_=1021.6, n_={"current_A": 1000}), models[0])
+    current, results = d._round_from_anchor(None, SETUP, [], [], models[0], None, None, None, None, None,
+                                            lambda s: None, {})
+    assert refitted_from == costs[:refits] and d.reanchor_rounds_ == refits
+    assert current is models[min(refits, len(costs) - 1)]
+    assert [r.text for r in results] == [f"results from {costs[refits - 1]}", f"judged against {current.cost_}"]
+    assert (1000 * math.log(729.0 / 526.5) > 10) and not (1000 * math.log(526.5 / 526.4) > 10)

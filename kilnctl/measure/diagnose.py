@@ -498,31 +498,9 @@ class Diagnosis:
                                          say)
             results.sort(key=_rank)
             anchored, results = self._reanchor(m, params, selected, current, results, scales, train, test, exp, say)
-            n_fit = sum(anchored.n_.values())
-            if anchored is not current and n_fit * math.log(current.cost_ / anchored.cost_) > self.min_delta_bic:
-                # the current structure reached a better valley from a candidate's base values: every candidate
-                # was refitted from the old one (its effect then bought an escape from that valley, which the
-                # evidence would credit it with), so the round is refitted from the new model when the escape
-                # alone would count as evidence (n ln(cost ratio) above the BIC threshold); and again, up to
-                # REANCHOR_ROUNDS times, when the refitted round re-anchors it that far once more (red team 5's
-                # g3: 729 -> 721 -> 526.5 after the first refit; every candidate, refitted from 729's values,
-                # then lost to the new model, the unbalance among them, and the fit ended at 93.4 %)
-                current = anchored
-                for _ in range(REANCHOR_ROUNDS):
-                    say("  candidates refitted from the re-anchored model")
-                    self.reanchor_rounds_ += 1
-                    results = self._try_all(m, params, selected, names, current, scales, train, test, exp, pool,
-                                            say, before)
-                    results = self._in_best_form(m, params, selected, results, current, scales, train, test, exp,
-                                                 pool, say)
-                    results.sort(key=_rank)
-                    anchored, results = self._reanchor(m, params, selected, current, results, scales, train, test,
-                                                       exp, say)
-                    far = anchored is not current and (sum(anchored.n_.values())
-                                                       * math.log(current.cost_ / anchored.cost_) > self.min_delta_bic)
-                    current = anchored
-                    if not far:
-                        break
+            if self._moved_far(current, anchored):
+                current, results = self._round_from_anchor(m, params, selected, names, anchored, scales, train,
+                                                           test, exp, pool, say, before)
             change = self._outside(m, params, selected, current, results, scales, train, test, exp, say)
             rounds.append(results)
             pairs = None
@@ -617,6 +595,46 @@ class Diagnosis:
         say(f"final: {_fmt_fit(self.final_)} with {', '.join(selected) or 'no effect added'} "
             f"({self.wall_s_:.1f} s)")
         return self
+
+    def _moved_far(self, current, anchored) -> bool:
+        """True when re-anchoring moved the current model by more than the BIC threshold (n ln(cost ratio)): the
+        move alone would count as evidence for an effect."""
+        return anchored is not current and (sum(anchored.n_.values()) * math.log(current.cost_ / anchored.cost_)
+                                             > self.min_delta_bic)
+
+    def _round_from_anchor(self, m, params, selected, names, anchored, scales, train, test, exp, pool, say,
+                           before):
+        """The round's candidates refitted from a re-anchored model, again while that moves it far once more.
+
+        The current structure reached a better valley from a candidate's base values (:meth:`_reanchor`): every
+        candidate was refitted from the old one, and its effect then bought an escape from that valley, which
+        the evidence would credit it with.  So the round is refitted from the new model; and again, up to
+        :data:`REANCHOR_ROUNDS` times, while the refitted round re-anchors it by more than the BIC threshold
+        once more (red team 5's g3: cost 729 -> 721 -> 526.5 after the first refit; every candidate, refitted
+        from 729's values, then lost to the new model, the unbalance among them, and the fit ended at 93.4 %
+        with the torque law alone; refitted from 526.5 the unbalance is added, 97.4 %).
+
+        Returns
+        -------
+        (Calibration, list of CandidateResult)
+            The current model and the round's results judged against it, sorted.
+        """
+        current = anchored
+        for _ in range(REANCHOR_ROUNDS):
+            say("  candidates refitted from the re-anchored model")
+            self.reanchor_rounds_ += 1
+            results = self._try_all(m, params, selected, names, current, scales, train, test, exp, pool, say,
+                                    before)
+            results = self._in_best_form(m, params, selected, results, current, scales, train, test, exp, pool,
+                                         say)
+            results.sort(key=_rank)
+            anchored, results = self._reanchor(m, params, selected, current, results, scales, train, test, exp,
+                                               say)
+            far = self._moved_far(current, anchored)
+            current = anchored
+            if not far:
+                break
+        return current, results
 
     def _in_best_form(self, m, params, selected, results, current, scales, train, test, exp, pool, say) -> list:
         """Each supported candidate with other forms (:attr:`Effect.forms`) refitted in each form (in parallel
