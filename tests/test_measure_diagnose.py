@@ -1232,22 +1232,26 @@ def test_no_skew_caution_when_the_speed_matches_unshifted():
 
 @pytest.mark.parametrize("costs, refits", [
     ([729.0, 526.5, 526.4], 2),   # red team 5's g3: the refitted round moved the model far again, then stayed
-    ([729.0, 728.9], 1),          # a move too small to count as evidence: one refit, as before
+    ([729.0, 728.9], 1),          # a move too small to count: one refit, as before
+    ([479.66, 477.64, 400.0], 1),  # 0.4 % of the cost, though 16.9 by the BIC rule: not refitted again
     ([700.0, 600.0, 500.0, 400.0, 300.0], 3),  # at most REANCHOR_ROUNDS refits
 ])
 def test_a_round_is_refitted_while_re_anchoring_moves_the_model_far(costs, refits):
-    # truth by construction: n ln(cost ratio) against the BIC threshold 10, worked out by hand for n = 1000
-    # samples: 729 -> 526.5 is 325 (far), 526.5 -> 526.4 is 0.19 (not), 729 -> 728.9 is 0.14.  The round's
-    # candidates are each time refitted from the latest model, and the results returned are the last re-anchoring's.
-    # The calibrations are stand-ins: only the loop's logic is tested
+    # truth by construction, worked out by hand: a refit is repeated when the refitted round moved the model by
+    # more than 5 % of its cost (729 / 526.5 = 1.385, 526.5 / 526.4 = 1.0002, 479.66 / 477.64 = 1.0042,
+    # 700 / 600 = 1.167), not by the BIC rule of the first refit (decided by the caller: n ln(cost ratio) above
+    # 10; for n = 1000, 1021.6 -> 729 is 337).  The stand-ins have 4000 samples, as the record of the 0.4 %
+    # move, where n ln(ratio) = 16.9 would have counted under that rule.  The round's candidates are each time
+    # refitted from the latest model, and the results returned are the last re-anchoring's.  The calibrations
+    # are stand-ins: only the loop's logic is tested
     import math
 
-    from kilnctl.measure.diagnose import REANCHOR_ROUNDS
+    from kilnctl.measure.diagnose import REANCHOR_AGAIN, REANCHOR_ROUNDS
 
-    assert REANCHOR_ROUNDS == 3
+    assert REANCHOR_ROUNDS == 3 and REANCHOR_AGAIN == 0.05
     d = Diagnosis(SETUP)
     d.reanchor_rounds_ = 0
-    models = [SimpleNamespace(cost_=c, n_={"current_A": 1000}) for c in costs]
+    models = [SimpleNamespace(cost_=c, n_={"current_A": 4000}) for c in costs]
     refitted_from = []
 
     def result(text):
@@ -1271,4 +1275,4 @@ def test_a_round_is_refitted_while_re_anchoring_moves_the_model_far(costs, refit
     assert refitted_from == costs[:refits] and d.reanchor_rounds_ == refits
     assert current is models[min(refits, len(costs) - 1)]
     assert [r.text for r in results] == [f"results from {costs[refits - 1]}", f"judged against {current.cost_}"]
-    assert (1000 * math.log(729.0 / 526.5) > 10) and not (1000 * math.log(526.5 / 526.4) > 10)
+    assert 1000 * math.log(1021.6 / 729.0) > 10 and 4000 * math.log(479.66 / 477.64) > 10
