@@ -1276,3 +1276,35 @@ def test_a_round_is_refitted_while_re_anchoring_moves_the_model_far(costs, refit
     assert current is models[min(refits, len(costs) - 1)]
     assert [r.text for r in results] == [f"results from {costs[refits - 1]}", f"judged against {current.cost_}"]
     assert 1000 * math.log(1021.6 / 729.0) > 10 and 4000 * math.log(479.66 / 477.64) > 10
+
+
+@pytest.mark.parametrize("J_v, again_cost, kept", [
+    (1.0e4, 0.36, "again"),     # base values far from the setup's (J_v 99 % off), the search from it fits better
+    (1.0e4, 70.0, "found"),     # far, but the search from the setup fits worse: the greedy one is kept
+    (1.70e6, 0.36, "found"),    # within 10 % of the setup's values: no second search at all
+])
+def test_the_final_stick_slip_search_is_run_again_from_the_setup_when_its_values_lie_far(J_v, again_cost, kept):
+    # truth by construction: the setup's J_v is 1.678e6, so 1.0e4 lies 99 % from it (beyond SETUP_FAR = 10 %)
+    # and 1.70e6 1.3 %; the kept calibration is the one of lower cost, counting both searches' starts.  The
+    # calibrations are stand-ins: only the rule is tested (plant:torque_law+compliance/s1 in docs/benchmarks.md)
+    d = Diagnosis(SETUP)
+    params = d.params
+    greedy = {"mu_c": 0.409, "mu_s": 0.49, "m_v": 5.6e5, "J_v": J_v, "k_po": 8.1e7, "C_po": 1.05e6}
+    found = SimpleNamespace(cost_=66.2, local_fits_=["f1", "f2"], n_starts_=21)
+    calls = []
+
+    def from_setup(m, params, effects, eff, p, init, setup_base, scales, train, exp, ff, n_local):
+        calls.append((effects, eff.name, setup_base["J_v"], scales))
+        return SimpleNamespace(cost_=again_cost, local_fits_=["a1"], n_starts_=30)
+
+    d._refit_from_setup = from_setup
+    out = d._final_from_setup(None, params, ["torque_friction_law", "drivetrain_compliance"], greedy, None, None,
+                              found)
+    if J_v > 1e6:
+        assert calls == [] and out is found
+        return
+    assert calls == [(("torque_friction_law", "drivetrain_compliance"), "drivetrain_compliance", params.J_v, "std")]
+    if kept == "found":
+        assert out is found
+    else:
+        assert out.cost_ == 0.36 and out.local_fits_ == ["f1", "f2", "a1"] and out.n_starts_ == 51
