@@ -1298,6 +1298,8 @@ def test_the_final_stick_slip_search_is_run_again_from_the_setup_when_its_values
         return SimpleNamespace(cost_=again_cost, local_fits_=["a1"], n_starts_=30)
 
     d._refit_from_setup = from_setup
+    # nothing selected (a stick-slip base under the law the setup states): no effect to search with
+    assert d._final_from_setup(None, params, [], greedy, None, None, found) is found and calls == []
     out = d._final_from_setup(None, params, ["torque_friction_law", "drivetrain_compliance"], greedy, None, None,
                               found)
     if J_v > 1e6:

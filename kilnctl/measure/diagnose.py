@@ -411,8 +411,8 @@ class Diagnosis:
         J_v 1.0e4 where the plant has 1.6e6, at 74.3 % against the structure's 98.1 %; from the setup's
         values that structure reaches 98.13 % (9 s)."""
         setup = self._setup_values(params)
-        if "mu_c" not in setup or not _far(greedy, setup):
-            return found
+        if not selected or "mu_c" not in setup or not _far(greedy, setup):
+            return found  # (nothing selected under a law the setup states: the base's own search did this)
         _, _, p, _ = self._structure(params, tuple(selected))
         again = self._refit_from_setup(m, params, tuple(selected), CATALOGUE[selected[-1]], p, dict(greedy), setup,
                                        "std", None, exp, ff, self.n_local + 1)
