@@ -99,7 +99,8 @@ def clipped_levels(arrays, i_max: float | None = None) -> list[ClipLevel]:
             if _noise(a, at_mask) < NOISE_REL * float(np.max(np.abs(a))):
                 continue
             at = np.flatnonzero(at_mask)
-            # a record without noise at rest before its start holds one value too: not a clipped range
+            # a converter that is off before the start logs one value (0 A) on every sample at rest: a stretch
+            # from the first sample is no clipped range unless enough samples sit at the level after it
             lead = int(np.argmax(np.diff(at) != 1)) + 1 if at.size > 1 and (np.diff(at) != 1).any() else at.size
             if at[0] == 0 and at.size - lead < CLIP_MIN_SAMPLES:
                 continue
