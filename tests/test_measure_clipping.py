@@ -88,3 +88,16 @@ def test_a_record_clipped_almost_everywhere_is_refused_with_the_column_named(rec
     level = float(np.quantile(record.current, 0.04))  # 40 of 1001 samples below it, at rest and on the early ramp
     with pytest.raises(DataError, match=r"column 'current_A' at .*fewer than 50 samples .*wider range"):
         _with_current(record, np.minimum(record.current, level))
+
+
+def test_a_converter_off_at_rest_is_no_clipped_range(record):
+    # truth by construction: the current reads exactly 0 A on the 40 samples at rest before the start (a
+    # converter that is off), its smallest value and held 40 times; that stretch from the first sample is not
+    # a clipped range, while the same zeros in the middle of the running record would be
+    cur = record.current.copy()
+    cur[:40] = 0.0
+    assert cur.min() == 0.0 and np.sum(cur == 0.0) == 40
+    assert clipped_levels({"current_A": cur}, SETUP.I_max) == []
+    moved = np.roll(cur, 400)
+    (c,) = clipped_levels({"current_A": moved}, SETUP.I_max)
+    assert (c.side, c.level, c.n) == ("lower", 0.0, 40)
