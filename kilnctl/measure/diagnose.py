@@ -359,8 +359,8 @@ class Diagnosis:
         The kept calibration's ``local_fits_`` and ``n_starts_`` count both searches.  With ``base`` (the
         base model's calibration on the whole record) its values, every effect at its null value, are a further
         starting point, and the base itself is kept when the structure is the base's and nothing fits better:
-        the final model never fits worse than the base it extends.  A stick-slip structure whose greedy values
-        lie far from the setup's is searched once more from the setup's (:meth:`_final_from_setup`).
+        the final model never fits worse than the base it extends.  A stick-slip structure whose search ends far
+        from the setup's base values is searched once more from them (:meth:`_final_from_setup`).
         """
         greedy = dict(current.values_)
         setup_base = dict(greedy, **self._setup_values(params))
@@ -390,7 +390,7 @@ class Diagnosis:
             # that reached the true structure's optimum on torque law + second motor records, seeds 101-103)
             found = self._calibrate(m, params, selected, "std", None, greedy, [setup_base] + spread, exp, ff, None,
                                     self.n_local + 2, True)
-            return self._final_from_setup(m, params, selected, greedy, exp, ff, found)
+            return self._final_from_setup(m, params, selected, exp, ff, found)
         args = [(m, params, selected, "std", None, init, spread, exp, ff, None, 1, True)
                 for init in (greedy, setup_base)]
         cals = [c for c in self._run_calibrations(args, pool) if c is not None]
@@ -401,21 +401,21 @@ class Diagnosis:
         best.n_starts_ = sum(c.n_starts_ for c in cals)
         return best
 
-    def _final_from_setup(self, m, params, selected, greedy, exp, ff, found) -> Calibration:
-        """The final stick-slip search again from the setup's base values when the greedy search's lie far
-        from them (:func:`_far`), as a round's second pass does (:meth:`_refit_from_setup`, the last selected
-        effect's own starts times the law's friction grid); the calibration of lower cost.
+    def _final_from_setup(self, m, params, selected, exp, ff, found) -> Calibration:
+        """The final stick-slip search again from the setup's base values when the base values it ended at
+        (``found``) lie far from them (:func:`_far`), as a round's second pass does (:meth:`_refit_from_setup`:
+        the last selected effect's own starts times the law's friction grid, the effects' other parameters
+        where ``found`` has them); the calibration of lower cost.
 
-        The greedy search's base values may have made up for effects added later and sit in a valley the
-        final search's spread does not leave: on plant:torque_law+compliance/s1 (this machine) it ended with
-        J_v 1.0e4 where the plant has 1.6e6, at 74.3 % against the structure's 98.1 %; from the setup's
-        values that structure reaches 98.13 % (9 s)."""
+        The search's base values may make up for what its valley misses: on plant:torque_law+compliance/s1
+        (this machine) it ended with J_v 1.0e4 where the plant has 1.6e6, at 74.3 % against the structure's
+        98.1 %; from the setup's values that structure reaches 98.13 % (9 s)."""
         setup = self._setup_values(params)
-        if not selected or "mu_c" not in setup or not _far(greedy, setup):
+        if not selected or "mu_c" not in setup or not _far(found.values_, setup):
             return found  # (nothing selected under a law the setup states: the base's own search did this)
         _, _, p, _ = self._structure(params, tuple(selected))
-        again = self._refit_from_setup(m, params, tuple(selected), CATALOGUE[selected[-1]], p, dict(greedy), setup,
-                                       "std", None, exp, ff, self.n_local + 1)
+        again = self._refit_from_setup(m, params, tuple(selected), CATALOGUE[selected[-1]], p,
+                                       dict(found.values_), setup, "std", None, exp, ff, self.n_local + 1)
         if again is None or again.cost_ >= found.cost_:
             return found
         again.local_fits_ = list(found.local_fits_) + list(again.local_fits_)
