@@ -356,7 +356,7 @@ class Diagnosis:
         (fitted on the fitting part, with other weights), one from the setup's base values; each runs a local
         fit from its best point, and where the structure has stick-slip (a rugged cost) also from its
         starting values.  Where stick-slip makes the cost rugged a single local fit stops in the first valley it meets.
-        The kept calibration's ``local_fits_`` and ``n_starts_`` count both searches.  With ``base`` (the
+        The kept calibration's ``local_fits_`` and ``n_starts_`` count every search.  With ``base`` (the
         base model's calibration on the whole record) its values, every effect at its null value, are a further
         starting point, and the base itself is kept when the structure is the base's and nothing fits better:
         the final model never fits worse than the base it extends.  A stick-slip structure whose search ends far
@@ -1255,8 +1255,12 @@ class Diagnosis:
             found = self._calibrate(m, params, effects, "std", train, dict(init, **setup_base), starts,
                                     experiment=exp, first_failure=first_failure, new_effect=name, n_local=n_local,
                                     screen=SCREEN)
-            return self._calibrate(m, params, effects, scales, train, dict(found.values_), (), experiment=exp,
-                                   first_failure=first_failure)
+            polished = self._calibrate(m, params, effects, scales, train, dict(found.values_), (), experiment=exp,
+                                       first_failure=first_failure)
+            # the starts and local fits reported are the search's too
+            polished.n_starts_ += found.n_starts_
+            polished.local_fits_ = list(found.local_fits_) + list(polished.local_fits_)
+            return polished
         except KilnctlError:
             return None
 
