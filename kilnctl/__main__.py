@@ -1,6 +1,4 @@
-"""``python -m kilnctl``: the ``kilnctl`` command line (:func:`kilnctl.cli.main`)."""
-import sys
+"""``python -m kilnctl``: the ``kilnctl`` command line (:func:`kilnctl.cli.run`)."""
+from .cli import run
 
-from .cli import main
-
-sys.exit(main())
+run()

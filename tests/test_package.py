@@ -59,7 +59,7 @@ def test_wheel_and_sdist_carry_the_data_the_c_source_and_one_version(dist):
     meta = zipfile.ZipFile(wheel).read(f"kilnctl-{VERSION}.dist-info/METADATA").decode()
     assert f"\nVersion: {VERSION}\n" in meta  # the version of kilnctl/__init__.py, the one place it is written
     entry = zipfile.ZipFile(wheel).read(f"kilnctl-{VERSION}.dist-info/entry_points.txt").decode()
-    assert "kilnctl = kilnctl.cli:main" in entry
+    assert "kilnctl = kilnctl.cli:run" in entry
     # PEP 639: the licence is named by its SPDX expression and its text travels in both distributions
     assert "\nLicense-Expression: BSD-3-Clause\n" in meta and "\nLicense-File: LICENSE\n" in meta
     assert f"kilnctl-{VERSION}.dist-info/licenses/LICENSE" in names

@@ -328,5 +328,22 @@ def main(argv=None) -> int:
             raise
 
 
+def run() -> None:  # pragma: no cover - ends the process
+    """The ``kilnctl`` console script: :func:`main`, then the process ends with its exit code.
+
+    After a Ctrl-C (exit code 130) the process ends without the interpreter's finalization: the interrupt
+    may have left a C library (CasADi, CVODES) in the middle of a computation, and its clean-up at exit
+    can abort the process (a CI run of the Ctrl-C test once ended with status -6 after printing
+    "kilnctl simulate: interrupted"); everything kilnctl writes is written whole or removed by then.
+    """
+    code = main()
+    if code == EXIT_INTERRUPTED:
+        for stream in (sys.stdout, sys.stderr, sys.__stderr__):
+            with contextlib.suppress(Exception):
+                stream.flush()
+        os._exit(code)
+    sys.exit(code)
+
+
 if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    run()
