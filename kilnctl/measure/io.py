@@ -1018,10 +1018,11 @@ def _checked(arrays, lines, source, params, notes, row_word, labels=None, log=Fa
                             f"a channel at (column {labels.get(c.channel) or repr(c.channel)} at {c.level:.6g}): "
                             f"fewer than {MIN_SAMPLES} samples are left to compare a model with; log the channel "
                             "with a wider range")
+        resampled = _resampled_notes(t, arrays, med)
         notes = tuple(notes) + tuple(_sampling_notes(t, dts, med, lines, row_word)) \
             + tuple(_spike_notes(arrays, lines, row_word, labels)) + tuple(_frozen_notes(t, arrays, lines, row_word)) \
-            + tuple(_resampled_notes(t, arrays, med)) + tuple(clipped_notes(clipped, arrays, t, lines, row_word, labels)) \
-            + tuple(_speed_step_notes(arrays) if resampled_every(arrays.get("current_A")) is None else ())
+            + tuple(resampled) + tuple(clipped_notes(clipped, arrays, t, lines, row_word, labels)) \
+            + tuple(() if resampled else _speed_step_notes(arrays))  # (held values repeat as counts do)
     return Measurement(t=t, channels=arrays, source=source, lines=lines, notes=tuple(notes), row_word=row_word,
                        clipped=clipped)
 
