@@ -18,7 +18,7 @@ import numpy as np
 
 from .stats import robust_sigma
 
-__all__ = ["ClipLevel", "clipped_levels", "clipped_notes", "unclipped", "CLIP_MIN_SAMPLES", "CLIP_RATIO", "NOISE_REL",
+__all__ = ["ClipLevel", "clipped_levels", "clipped_notes", "unclipped", "residual", "CLIP_MIN_SAMPLES", "CLIP_RATIO", "NOISE_REL",
            "DRIVE_LIMIT_TOL"]
 
 #: a channel is clipped at its largest (smallest) value when at least this many samples sit exactly there ...
@@ -116,6 +116,12 @@ def unclipped(levels, channels) -> np.ndarray | None:
         at = c.at(channels[c.channel])
         keep = ~at if keep is None else keep & ~at
     return keep
+
+
+def residual(measurement, channel: str, model, active) -> np.ndarray:
+    """Measured minus model of one channel on the samples ``active``, 0 where the logger clipped the record
+    (:attr:`Measurement.unclipped <kilnctl.measure.io.Measurement.unclipped>`: no measurement there)."""
+    return np.where(measurement.unclipped[active], measurement.channels[channel][active] - model, 0.0)
 
 
 def _noise(a, at) -> float:

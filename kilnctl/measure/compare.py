@@ -19,6 +19,7 @@ import numpy as np
 from ..params import Parameters
 from ..simulate import resolve_gains
 from .io import Experiment, Measurement
+from .clipping import residual as clipped_residual
 from .runner import CHANNELS, ModelRun, kiln_angle, run_model
 from .stats import autocorr, crosscorr, failing_intervals, fit_percent, residual_spectrum, robust_sigma
 
@@ -437,7 +438,7 @@ def compare_run(measurement: Measurement, run: ModelRun, experiment: Experiment,
     ok = measurement.unclipped[active]  # fit %, bias and rms leave out samples the logger clipped
     for k, (_name, unit) in CHANNELS.items():
         y, yhat = meas[k], run.outputs[k]
-        e = np.where(ok, y - yhat, 0.0)  # a clipped sample is no measurement: no residual
+        e = clipped_residual(measurement, k, yhat, active)
         others = {"speed_ref_rpm (input)": u}
         others.update({f"{o} (measured)": meas[o] for o in CHANNELS if o != k})
         xc = {label: crosscorr(e, sig, max_lag, t=t) for label, sig in others.items()}

@@ -52,6 +52,7 @@ from .calibrate import Calibration, Smoothing, default_starts, holdout_masks
 from .compare import compare_run
 from .effects import CATALOGUE, DEFAULT_CALIBRATE, effect_components, grid_starts
 from .breakaways import breakaways
+from .clipping import residual as clipped_residual
 from .cautions import caution_texts, effect_cautions, setup_cautions, skew_texts
 from .io import Measurement
 from .evidence import CandidateResult, close_rival, judge
@@ -427,7 +428,7 @@ class Diagnosis:
         """End of the first failing interval of a calibrated model, + 1 s, as a fraction of the record."""
         active = m.t >= exp.t0 - 1e-9
         t = m.t[active]
-        e = np.where(m.unclipped[active], m.current[active] - cal.run_.outputs["current_A"], 0.0)
+        e = clipped_residual(m, "current_A", cal.run_.outputs["current_A"], active)
         iv = failing_intervals(t, e)
         if not iv:
             return None

@@ -21,6 +21,13 @@ from .catalogue import Effect, Form, FreeParameter
 DS_SCALE = 1e-4
 
 
+def _coupling_starts(values) -> list[dict]:
+    """Starting points of the backlash's ``coupling`` form: a stiffer link in three decades, damped at 0.1, 0.3
+    and 1 of its mode on the motor (c = 2 zeta sqrt(k J_m), Table 1's J_m: starting points only)."""
+    j_m = Parameters().J_m
+    return [{"k_c": k, "c_c": 2.0 * z * math.sqrt(k * j_m)} for k in (1e6, 1e7, 1e8) for z in (0.1, 0.3, 1.0)]
+
+
 #: a fitted drive train damped at or above this ratio of its torsional mode has no ring to show (a step response
 #: overshoots by less than 5 %) [-]
 RING_DAMPING = 0.7
@@ -303,10 +310,7 @@ class Mesh(Component):
                              FreeParameter("c_c", 1.0, 1e6, "log", 150.0)),
                         # at the setup's k_c and c_c the form is the effect's own
                         near={},
-                        # a stiffer link in three decades, damped at 0.1, 0.3 and 1 of its mode on the motor
-                        # (c = 2 zeta sqrt(k J_m), Table 1's J_m: starting points only)
-                        starts=lambda v: [{"k_c": k, "c_c": 2.0 * z * math.sqrt(k * Parameters().J_m)}
-                                          for k in (1e6, 1e7, 1e8) for z in (0.1, 0.3, 1.0)],
+                        starts=_coupling_starts,
                         # a drive with no compliant coupling behind the play (a plant with a stiff link): the
                         # fit may take either to its upper bound, where the coupling is rigid
                         ends={"k_c": "upper", "c_c": "upper"}),)),
