@@ -297,7 +297,7 @@ def test_a_one_sample_spike_within_the_limits_is_noted_and_an_impact_is_not():
     cur[400] = 3000.0
     spiked = Measurement.from_arrays(m.t, cur, m.speed, m.speed_ref)
     (note,) = [n for n in spiked.notes if "spike" in n]
-    assert note.startswith("column 'current_A': 1 isolated one-sample spike(s), the largest on sample ")
+    assert note.startswith("column 'current_A': 1 isolated spike(s) of one sample, the largest on sample ")
     assert "3000 A" in note and "glitch" in note
     impacts, _ = make(find("pair:torque_friction_law+backlash/s2"))
     assert not [n for n in impacts.notes if "spike" in n]

@@ -265,3 +265,33 @@ def test_how_the_record_was_read_is_in_the_report_files():
     figs = {"s": report.plot_ranking(d), "r": report.plot_ranking(d)}
     text = html.unescape(report.diagnosis_html(d, figs))
     assert "Note: record: speed_rpm converted from kiln rpm (x 1076.5)" in text
+
+
+def test_a_form_refitted_again_against_the_same_model_is_listed_once_and_long_names_keep_the_columns():
+    """Red team 8: the lag's second-order and delay forms were each listed twice against the same model (the
+    round refitted from a re-anchored model), with different numbers; and a pair's or a form's name longer than
+    the effect column pushed its numbers out of line.  Truth: the hand-built entries (the last refit is listed,
+    with how many there were) and the header's column positions."""
+    d = hand_built()
+    first = _cand("speed_sensor_lag", 7.7, 7.0, 0.0, False, "BIC does not improve enough (dBIC +7.7 >= -10)")
+    last = _cand("speed_sensor_lag", 8.3, 7.5, 0.0, False, "BIC does not improve enough (dBIC +8.3 >= -10)")
+    other = _cand("speed_sensor_lag", -18.4, 311.9, 0.6, False, "likely fitting noise")
+    d.form_results_ = [["speed_sensor_lag", "second_order", first, False, ("second_motor",)],
+                       ["speed_sensor_lag", "delay", other, False, ("second_motor",)],
+                       ["speed_sensor_lag", "second_order", last, False, ("second_motor",)],
+                       ["speed_sensor_lag", "second_order", first, False, ()]]
+    forms = report.form_verdicts(d)
+    assert [(f, r.delta_bic, against) for _, f, r, _, _, against in forms] == [
+        ("delay", -18.4, "base + second_motor"), ("second_order", 8.3, "base + second_motor"),
+        ("second_order", 7.7, "the base")]
+    assert "(the last of 2 refits of this form against this model" in forms[1][4]
+    text = report.diagnosis_summary(d)
+    head = next(x for x in text.splitlines() if x.strip().startswith("effect") and "dBIC" in x)
+    col = head.index("dBIC") + len("dBIC")
+    lines = text.splitlines()
+    for k, x in enumerate(lines):
+        if x.strip() == "speed_sensor_lag (second_order form)":  # longer than the column: a line of its own
+            numbers = lines[k + 1]
+            assert numbers[:col].rstrip().endswith("+8.3") or numbers[:col].rstrip().endswith("+7.7")
+            assert len(numbers[:col]) == col and numbers[col - 4:col].strip()
+    assert sum(x.strip() == "speed_sensor_lag (second_order form)" for x in lines) == 2

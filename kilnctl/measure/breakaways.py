@@ -64,7 +64,7 @@ class Falls:
         return int(self.times.size)
 
 
-def breakaways(t, current, *, t_from: float, threshold: float | None = None) -> Falls:
+def breakaways(t, current, *, t_from: float, threshold: float | None = None, keep=None) -> Falls:
     """Times at which the current falls sharply (burden breakaways and re-sticks), after ``t_from``.
 
     The fall over :data:`DROP_WINDOW_S`, ``D(t) = i(t + w) - i(t)``, is computed by linear interpolation on a
@@ -83,6 +83,9 @@ def breakaways(t, current, *, t_from: float, threshold: float | None = None) -> 
     threshold : float, optional
         Least fall [A].  Default: the larger of 8 robust standard deviations of D (noise alone rarely reaches
         it) and 40 % of the deepest fall.
+    keep : ndarray of bool, optional
+        The samples to use (default all): a logger's spike (:mod:`~kilnctl.measure.glitches`) falls back as
+        sharply as a breakaway, so the record's spikes are left out and the current is read across them.
 
     Returns
     -------
@@ -91,6 +94,8 @@ def breakaways(t, current, *, t_from: float, threshold: float | None = None) -> 
     """
     t = np.asarray(t, float)
     i = np.asarray(current, float)
+    if keep is not None:
+        t, i = t[np.asarray(keep, bool)], i[np.asarray(keep, bool)]
     none = Falls(np.zeros(0), float("inf") if threshold is None else float(threshold))
     if t.size < 4 or t[-1] - DROP_WINDOW_S <= t_from:
         return none
@@ -188,7 +193,7 @@ class BreakawayTiming:
     t_from: float
 
     @classmethod
-    def pair(cls, t, current, run, *, t0: float, t_from: float, mask=None) -> "BreakawayTiming | None":
+    def pair(cls, t, current, run, *, t0: float, t_from: float, mask=None, keep=None) -> "BreakawayTiming | None":
         """Pair the record's falls with those of a model run, in order of time.
 
         Parameters
@@ -205,6 +210,8 @@ class BreakawayTiming:
             Record time from which falls are stick-slip cycles [s] (after the ramp).
         mask : ndarray of bool, optional
             The fitted samples: a pair whose samples are not all fitted (a held-out block) is not used.
+        keep : ndarray of bool, optional
+            The record's samples its falls are found on (its spikes left out: :func:`breakaways`).
 
         Returns
         -------
@@ -213,7 +220,7 @@ class BreakawayTiming:
             wholly in the fitted samples (nothing to compare).
         """
         t = np.asarray(t, float)
-        rec = breakaways(t, current, t_from=t_from)
+        rec = breakaways(t, current, t_from=t_from, keep=keep)
         if rec.size < 2:
             return None
         y = np.asarray(run.outputs["current_A"], float)

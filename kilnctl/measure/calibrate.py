@@ -30,6 +30,7 @@ from ..errors import KilnctlError, ModelError, NotFittedError, name_list
 from ..params import Parameters
 from ..simulate import resolve_gains
 from .breakaways import BreakawayTiming
+from .glitches import glitch_mask
 from .effects import DEFAULT_CALIBRATE, FreeParameter, free_parameter
 from .io import Experiment, Measurement
 from .runner import CHANNELS, ModelRun, run_model
@@ -81,8 +82,8 @@ def holdout_masks(measurement: Measurement, kind: str = "blocks", fraction: floa
     """
     t = measurement.t
     start = t[0] if t0 is None else t0
-    # samples at a level the logger clipped a channel at are in neither part (Measurement.unclipped)
-    active = (t >= start - 1e-9) & _unclipped(measurement)
+    # samples at a level the logger clipped a channel at, or in a spike, are in neither part (Measurement.kept)
+    active = (t >= start - 1e-9) & _kept(measurement)
     span = t[-1] - start
     rel = (t - start) / span if span > 0 else np.zeros_like(t)
     if kind == "tail":
@@ -96,9 +97,10 @@ def holdout_masks(measurement: Measurement, kind: str = "blocks", fraction: floa
     return active & ~test, test
 
 
-def _unclipped(measurement) -> np.ndarray:
-    """The record's samples where no channel is clipped (all, for a record built without the check)."""
-    keep = getattr(measurement, "unclipped", None)
+def _kept(measurement) -> np.ndarray:
+    """The record's samples where no channel is clipped or in a spike (:attr:`Measurement.kept
+    <kilnctl.measure.io.Measurement.kept>`; all, for a record built without the checks)."""
+    keep = getattr(measurement, "kept", None)
     return np.ones(measurement.t.size, bool) if keep is None else keep
 
 
@@ -228,8 +230,10 @@ class _Problem:
         self.model = model
         self.effects = tuple(effects)
         active = measurement.t >= experiment.t0 - 1e-9
-        self.mask = ((mask if mask is not None else np.ones(measurement.n, bool)) & _unclipped(measurement))[active]
+        self.mask = ((mask if mask is not None else np.ones(measurement.n, bool)) & _kept(measurement))[active]
         self.meas = {c: measurement.channels[c][active] for c in CHANNELS}
+        # the samples outside the record's spikes, where its stick-slip falls are looked for
+        self.unspiked = glitch_mask(getattr(measurement, "glitches", ()), measurement.n)[active]
         self.scales = scales
         self.walls: list[float] = []
         self.n_failed = 0
@@ -695,7 +699,7 @@ class _Search:
         if run is None:
             return u
         timing = BreakawayTiming.pair(self.t_act, self.prob.meas["current_A"], run, t0=self.t0,
-                                      t_from=self.cycles_from, mask=self.full_mask)
+                                      t_from=self.cycles_from, mask=self.full_mask, keep=self.prob.unspiked)
         if timing is None:
             return u
         return self._local_with("timing", timing, u)
@@ -898,7 +902,7 @@ class Calibration:
         if isinstance(self.scales, dict):
             return {c: float(self.scales[c]) for c in CHANNELS}
         out = {}
-        active = active & _unclipped(measurement)
+        active = active & _kept(measurement)
         for c in CHANNELS:
             s = float(np.std(measurement.channels[c][active]))
             out[c] = s if s > 0 else 1.0
@@ -1161,7 +1165,7 @@ class Calibration:
         m = self.measurement_ if measurement is None else measurement
         exp = self.experiment_ if m is self.measurement_ else m.experiment(self.params_, t0=self.t0)
         active = m.t >= exp.t0 - 1e-9
-        sel = ((np.ones(m.n, bool) if mask is None else np.asarray(mask, bool)) & _unclipped(m))[active]
+        sel = ((np.ones(m.n, bool) if mask is None else np.asarray(mask, bool)) & _kept(m))[active]
         out = self.predict(m)
         e = np.concatenate([(m.channels[c][active][sel] - out[c][sel]) / self.scales_[c] for c in CHANNELS])
         y = np.concatenate([(m.channels[c][active][sel] - m.channels[c][active][sel].mean()) / self.scales_[c]

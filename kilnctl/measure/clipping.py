@@ -119,9 +119,9 @@ def unclipped(levels, channels) -> np.ndarray | None:
 
 
 def residual(measurement, channel: str, model, active) -> np.ndarray:
-    """Measured minus model of one channel on the samples ``active``, 0 where the logger clipped the record
-    (:attr:`Measurement.unclipped <kilnctl.measure.io.Measurement.unclipped>`: no measurement there)."""
-    return np.where(measurement.unclipped[active], measurement.channels[channel][active] - model, 0.0)
+    """Measured minus model of one channel on the samples ``active``, 0 where the logger clipped the record or
+    a spike sits (:attr:`Measurement.kept <kilnctl.measure.io.Measurement.kept>`: no measurement there)."""
+    return np.where(measurement.kept[active], measurement.channels[channel][active] - model, 0.0)
 
 
 def _noise(a, at) -> float:

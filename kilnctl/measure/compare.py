@@ -91,10 +91,10 @@ class ChannelComparison:
         Column name and unit.
     measured, model, residual : ndarray
         Signals at the compared times; residual = measured - model, 0 on
-        samples the logger clipped (:attr:`Measurement.unclipped
-        <kilnctl.measure.io.Measurement.unclipped>`: no measurement there).
+        samples the logger clipped or in a spike (:attr:`Measurement.kept
+        <kilnctl.measure.io.Measurement.kept>`: no measurement there).
     fit : float
-        Fit % (MATLAB ``compare``), over the samples not clipped, as are
+        Fit % (MATLAB ``compare``), over the samples kept, as are
         ``bias``, ``rms`` and ``sigma``.
     bias : float
         Mean residual [unit] (positive: model low).
@@ -435,7 +435,7 @@ def compare_run(measurement: Measurement, run: ModelRun, experiment: Experiment,
     u = measurement.speed_ref[active] if measurement.speed_ref is not None else run.outputs["speed_ref_rpm"]
     phases = _phases(run, experiment.t0, float(t[-1]))
     chans = {}
-    ok = measurement.unclipped[active]  # fit %, bias and rms leave out samples the logger clipped
+    ok = measurement.kept[active]  # fit %, bias and rms leave out samples the logger clipped and spikes
     for k, (_name, unit) in CHANNELS.items():
         y, yhat = meas[k], run.outputs[k]
         e = clipped_residual(measurement, k, yhat, active)

@@ -53,6 +53,7 @@ from .compare import compare_run
 from .effects import CATALOGUE, DEFAULT_CALIBRATE, effect_components, grid_starts
 from .breakaways import breakaways
 from .clipping import residual as clipped_residual
+from .glitches import glitch_mask
 from .cautions import caution_texts, effect_cautions, setup_cautions, skew_texts
 from .io import Measurement
 from .evidence import CandidateResult, close_rival, judge
@@ -478,7 +479,7 @@ class Diagnosis:
         active = m.t >= exp.t0 - 1e-9
         scales = {}
         for c in CHANNELS:
-            e = (m.channels[c][active] - base.run_.outputs[c])[m.unclipped[active]]
+            e = (m.channels[c][active] - base.run_.outputs[c])[m.kept[active]]
             scales[c] = max(float(np.sqrt(np.mean(e ** 2))), 1e-3 * float(np.std(m.channels[c][active])), 1e-12)
         train, test = holdout_masks(m, self.holdout, self.holdout_fraction, t0=exp.t0)
         self.scales_, self.train_, self.test_ = scales, train, test
@@ -1687,9 +1688,10 @@ def _with_friction(law: list, eff, p, m) -> list[dict]:
 
 def _falls(m, exp):
     """The record's sharp falls of the current after the ramp (:func:`~kilnctl.measure.breakaways.breakaways`:
-    stick-slip breakaways)."""
+    stick-slip breakaways), its spikes left out (a spike falls back as sharply)."""
     active = m.t >= exp.t0 - 1e-9
-    return breakaways(m.t[active], m.current[active], t_from=exp.steady_from)
+    keep = glitch_mask(getattr(m, "glitches", ()), m.n)[active]
+    return breakaways(m.t[active], m.current[active], t_from=exp.steady_from, keep=keep)
 
 
 def _pinned(form, values: dict) -> list[str]:

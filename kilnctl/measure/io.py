@@ -35,8 +35,8 @@ from ..files import read_toml
 from ..params import GROUPS, SPECS, Parameters
 from ..units import RPM_PER_RAD_S
 from .clipping import clipped_levels, clipped_notes, unclipped
+from .glitches import glitch_mask, glitch_notes, glitches
 from .reference import fit_scurve
-from .stats import robust_sigma
 
 __all__ = ["Measurement", "Setup", "Experiment", "read_csv", "read_record", "load_setup", "REQUIRED", "OPTIONAL",
            "MIN_DURATION_S", "MIN_SAMPLES", "GAP_FACTOR", "MAX_RECORD_S", "record_columns"]
@@ -138,6 +138,9 @@ class Measurement:
         Channels the logger clipped at the end of its range
         (:func:`~kilnctl.measure.clipping.clipped_levels`); their samples at
         the level are left out of fits, evidence and fit % (:attr:`unclipped`).
+    glitches : tuple of Glitch
+        Isolated spikes of one or two samples (:func:`~kilnctl.measure.glitches.glitches`);
+        their samples are left out of fits, evidence and fit % too (:attr:`kept`).
     """
 
     t: np.ndarray
@@ -147,6 +150,7 @@ class Measurement:
     notes: tuple = ()
     row_word: str = "line"
     clipped: tuple = ()
+    glitches: tuple = ()
 
     # --- construction ---------------------------------------------------------
     @classmethod
@@ -218,6 +222,12 @@ class Measurement:
         the samples fits, evidence and fit % use."""
         keep = unclipped(self.clipped, self.channels)
         return np.ones(self.t.size, bool) if keep is None else keep
+
+    @property
+    def kept(self) -> np.ndarray:
+        """Mask of the samples fits, evidence, fit % and failing intervals use: none clipped (:attr:`unclipped`)
+        and none in a spike (:attr:`glitches`)."""
+        return self.unclipped & glitch_mask(self.glitches, self.t.size)
 
     @property
     def n(self) -> int:
@@ -1008,9 +1018,10 @@ def _checked(arrays, lines, source, params, notes, row_word, labels=None, log=Fa
     _check_time_scale(t, med, source, labels.get("time_s", "'time_s'"), params, math.inf if log else MAX_RECORD_S,
                       time_name, arrays.get("speed_rpm"))
     _check_units(arrays, lines, source, params, row_word, labels, log)
-    clipped = ()
+    clipped = spikes = ()
     if not log:
         clipped = tuple(clipped_levels(arrays, params.I_max))
+        spikes = glitches(arrays)
         kept = unclipped(clipped, arrays)
         if kept is not None and kept.sum() < MIN_SAMPLES:
             c = max(clipped, key=lambda c: c.n)
@@ -1020,11 +1031,12 @@ def _checked(arrays, lines, source, params, notes, row_word, labels=None, log=Fa
                             "with a wider range")
         resampled = _resampled_notes(t, arrays, med)
         notes = tuple(notes) + tuple(_sampling_notes(t, dts, med, lines, row_word)) \
-            + tuple(_spike_notes(arrays, lines, row_word, labels)) + tuple(_frozen_notes(t, arrays, lines, row_word)) \
+            + tuple(glitch_notes(spikes, arrays, lines, row_word, labels)) \
+            + tuple(_frozen_notes(t, arrays, lines, row_word)) \
             + tuple(resampled) + tuple(clipped_notes(clipped, arrays, t, lines, row_word, labels)) \
             + tuple(() if resampled else _speed_step_notes(arrays))  # (held values repeat as counts do)
     return Measurement(t=t, channels=arrays, source=source, lines=lines, notes=tuple(notes), row_word=row_word,
-                       clipped=clipped)
+                       clipped=clipped, glitches=spikes)
 
 
 def _sampling_notes(t, dts, med, lines, row_word) -> list[str]:
@@ -1042,50 +1054,6 @@ def _sampling_notes(t, dts, med, lines, row_word) -> list[str]:
                    f"samples?), the longest {dts[k]:.4g} s between t = {t[k]:.6g} s and {t[k + 1]:.6g} s ({row_word} "
                    f"{int(lines[k + 1])}); "
                    "the model is compared at the measured times (only the residual spectrum is taken on an even grid)")
-    return out
-
-
-#: a sample this many noise standard deviations from the median of its four neighbours, and five times further
-#: from it than the neighbours spread, is an isolated spike (:func:`_spike_notes`)
-SPIKE_SIGMAS = 20.0
-
-
-def _spike_notes(arrays, lines, row_word, labels) -> list[str]:
-    """Say where a channel holds isolated one-sample spikes (a logger's glitch within the unit limits).
-
-    A sample is one when it lies more than :data:`SPIKE_SIGMAS` noise standard deviations (from the second
-    differences' median absolute value, those of exactly zero left out: white noise of sigma gives second
-    differences of sigma sqrt(6)) from
-    the median of its two neighbours on either side, and more than five times their own spread from it: a
-    backlash impact's ringing or a breakaway's fall moves the neighbours too (none of the hard set's 61 records
-    at 50 Hz has one; at 10 Hz a backlash impact can be a single sample, hence the note's question).  One
-    glitch lowers the fit % of every model (3000 A once in the shipped example: 98.1 -> 84.2 %); the record is
-    kept as it is."""
-    out = []
-    for name, unit in (("current_A", "A"), ("speed_rpm", "rpm")):
-        a = arrays.get(name)
-        if a is None or a.size < 5:
-            continue
-        nb = np.stack([a[:-4], a[1:-3], a[3:-1], a[4:]])
-        dev = a[2:-2] - np.median(nb, axis=0)
-        d2 = np.diff(a, 2)
-        # samples that repeat exactly (a current clipped at its ADC range, values held or quantised by a historian)
-        # make second differences of exactly zero, which say nothing of the noise: judged on them, ordinary
-        # samples next to a clipped run read as spikes of millions of standard deviations (red team 7)
-        moving = d2[d2 != 0.0]
-        sigma = max(robust_sigma(moving if moving.size >= 10 else d2) / math.sqrt(6.0),
-                    1e-9 * (float(np.ptp(a)) or 1.0))
-        bad = np.flatnonzero((np.abs(dev) > SPIKE_SIGMAS * sigma) & (np.abs(dev) > 5.0 * np.ptp(nb, axis=0)))
-        if bad.size == 0:
-            continue
-        k = int(bad[np.argmax(np.abs(dev[bad]))]) + 2
-        label = (labels or {}).get(name) or repr(name)
-        out.append(f"column {label}: {bad.size} isolated one-sample spike(s), the largest on {row_word} "
-                   f"{int(lines[k])}: {float(a[k]):.4g} {unit} where its neighbours read about "
-                   f"{float(a[k] - dev[k - 2]):.4g} {unit} ({abs(dev[k - 2]) / sigma:.0f} noise standard deviations): "
-                   "a logger's glitch, or an event shorter than the sample step (a backlash impact sampled at "
-                   "10 Hz)? A glitch lowers the fit % of every model (the record is compared as it is): correct it "
-                   "if it is one")
     return out
 
 

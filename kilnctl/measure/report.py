@@ -423,11 +423,21 @@ def form_verdicts(d) -> list[tuple]:
     list of (str, str, CandidateResult, str, str, str)
         The effect, the form's name, its evidence against the candidate in its own form, ``judged in it``
         (the supported form of lowest BIC, in which the round then judged the candidate) or ``not used``,
-        why (the evidence's own reason), and the model it was a candidate for (``base + ...``).
+        why (the evidence's own reason), and the model it was a candidate for (``base + ...``).  A form refitted
+        more than once against the same model (a round refitted from a re-anchored model) is listed once, with
+        its last refit, the one the round used.
     """
+    entries = list(getattr(d, "form_results_", None) or [])
+    key = [(e, f, tuple(against)) for e, f, _, _, against in entries]
     out = []
-    for e, f, r, chosen, against in getattr(d, "form_results_", None) or []:
+    for i, (e, f, r, chosen, against) in enumerate(entries):
+        n = key.count(key[i])
+        if key[i] in key[i + 1:]:
+            continue  # refitted again later against the same model: that refit is the one the round used
         why = r.reason if chosen or not r.supported else f"{r.reason}; another form has the lower BIC"
+        if n > 1:
+            why += (f" (the last of {n} refits of this form against this model: the round was refitted from a "
+                    "re-anchored model)")
         out.append((e, f, r, "judged in it" if chosen else "not used", why,
                     "base + " + ", ".join(against) if against else "the base"))
     return out
@@ -679,12 +689,20 @@ def diagnosis_headline(d) -> str:
             + (f", {', '.join(parts)}" if parts else ""))
 
 
+#: width of the effect column of the summary's tables [characters]; a longer name (a pair, an effect in another
+#: form) stands on a line of its own above its numbers
+EFFECT_WIDTH = 22
+
+
 def _summary_rows(r, verdict: str, why: str) -> list[str]:
     """A candidate's row of the summary's table, then why, wrapped."""
     gain = f"{_signed(r.holdout_gain)} %" if math.isfinite(r.holdout_gain) else "-"
     fi = _fit_text(r.fit_percent.get("current_A", math.nan))
-    return ([f"    {label(r):<22} {_bic_text(r.delta_bic):>9} {_bic_text(r.delta_bic_corrected):>14} {gain:>9} "
-             f"{fi:>6}  {verdict}"] + _wrap(f"why: {why}", " " * 8, 5))
+    name = label(r)
+    first = [f"    {name}"] if len(name) > EFFECT_WIDTH else []
+    return (first + [f"    {'' if first else name:<{EFFECT_WIDTH}} {_bic_text(r.delta_bic):>9} "
+                     f"{_bic_text(r.delta_bic_corrected):>14} {gain:>9} {fi:>6}  {verdict}"]
+            + _wrap(f"why: {why}", " " * 8, 5))
 
 
 def diagnosis_summary(d) -> str:
@@ -709,7 +727,7 @@ def diagnosis_summary(d) -> str:
     lines += _wrap("dBIC: BIC change on the fitted part (negative favours the effect; plain and with the "
                    "residual's coloured noise modelled, 'whitened'); held-out: error reduction on the part not "
                    "fitted [%]; fit\u00a0I: current fit on the fitted part [%]", "  ")
-    head = f"    {'effect':<22} {'dBIC':>9} {'whitened dBIC':>14} {'held-out':>9} {'fit I':>6}  verdict"
+    head = f"    {'effect':<{EFFECT_WIDTH}} {'dBIC':>9} {'whitened dBIC':>14} {'held-out':>9} {'fit I':>6}  verdict"
     for i, rnd in enumerate(d.rounds_):
         lines.append(f"  round {i + 1}: candidates against "
                      + round_model(d, i))
