@@ -669,7 +669,9 @@ class Diagnosis:
 
     def _in_best_form(self, m, params, selected, results, current, scales, train, test, exp, pool, say) -> list:
         """Each supported candidate with other forms (:attr:`Effect.forms`) refitted in each form (in parallel
-        when a pool is given); the candidate is judged in its best form.
+        when a pool is given); the candidate is judged in its best form.  A form marked
+        :attr:`~kilnctl.model.catalogue.Form.unsupported_too` is refitted also when its effect lowered the BIC
+        without being supported.
 
         Each form is refitted (one local fit) from the candidate's fitted values with the form's added
         parameters where it behaves nearly as the effect's own form (:attr:`Form.near`), so it ends about as
@@ -686,8 +688,9 @@ class Diagnosis:
         its own form had dBIC -1130 against a compliance's -2215 that imitated the ringing, in its
         second-order form -2047).  Every form tried is listed in ``form_results_``.
         """
-        jobs = [(i, form) for i, r in enumerate(results) if r.supported and r.calibration is not None
-                and r.form is None for form in CATALOGUE[r.effect].forms if form.in_rounds]
+        jobs = [(i, form) for i, r in enumerate(results) if r.calibration is not None and r.form is None
+                for form in CATALOGUE[r.effect].forms if form.in_rounds
+                and (r.supported or (form.unsupported_too and r.delta_bic < 0))]
         if not jobs:
             return results
         ff = self._first_failure(m, current, exp)

@@ -96,6 +96,12 @@ class Form:
         or only in the final check, where the form must take the place of
         another selected effect (False: a form the rounds could not tell
         from noise on a usual record).
+    unsupported_too : bool
+        Tried in a round also when the effect in its own form lowered the
+        BIC without being supported: a form for the effect's usual case that
+        its own form describes too coarsely to win (a converter's PI current
+        limiter, whose overshoot and dip the clamp misses by hundreds of
+        amperes).
     """
 
     name: str
@@ -106,6 +112,7 @@ class Form:
     starts: Callable = field(repr=False, default=lambda values: [])
     ends: dict = field(default_factory=dict)
     in_rounds: bool = True
+    unsupported_too: bool = False
 
 
 @dataclass(frozen=True)

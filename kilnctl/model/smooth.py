@@ -62,7 +62,7 @@ STRIBECK_RATIO = 10.0
 
 #: components with modes that a smooth model leaves out: the optimizer keeps the unlimited voltage and current
 #: within V_max and I_max as constraints instead
-CONSTRAINED = ("voltage_limit", "current_limit")
+CONSTRAINED = ("voltage_limit", "current_limit", "current_limit_pi")
 
 
 def smooth_names(names) -> tuple[str, ...]:

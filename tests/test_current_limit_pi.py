@@ -1,0 +1,90 @@
+"""The converter's PI current limiter (component ``current_limit_pi``, the ``pi`` form of ``current_limit``).
+
+Truths: CVODES, the second engine (same events, same peak); the clamp ``current_limit``, the limiter's
+limit at stiff gains (within 1 A); the limiter's integral state against a trapezoid quadrature of the
+simulated current over each interval where it acts; the speed controller's integrator constant there
+(the clamp's anti-windup, read off the state).
+"""
+
+import numpy as np
+import pytest
+from scipy.integrate import cumulative_trapezoid
+
+from kilnctl import Parameters
+from kilnctl.measure.effects import CATALOGUE
+from kilnctl.model import component_names
+from kilnctl.model.compiled import compiler_available
+from kilnctl.model.smooth import smooth_names
+from kilnctl.simulate import simulate
+
+GIVEN = dict(friction_law="torque", gains="given", k_p=2.0, k_I=5.0, k_D=0.01)
+
+
+def _run(method="auto", **kw):
+    p = Parameters(**GIVEN).replace(**kw)
+    return simulate(p, "macro", 25.0, effects=("current_limit_pi",), dt=1e-3, rtol=1e-10, atol=1e-11,
+                    method=method)
+
+
+def _acting_intervals(r):
+    """Index arrays of the samples in each interval where the limiter acts."""
+    act = np.asarray(r.modes["current_limit_pi"]) == "upper"
+    edges = np.flatnonzero(np.diff(act.astype(int)))
+    pieces = np.split(np.arange(act.size), edges + 1)
+    return [ix for ix in pieces if act[ix[0]] and ix.size > 10]
+
+
+def test_replaces_the_clamp_and_leaves_smooth_models():
+    names = component_names("macro", add=("current_limit_pi",))
+    assert "current_limit_pi" in names and "current_limit" not in names
+    # the optimizer's smooth model keeps the limits as constraints, as it does for the clamp
+    assert "current_limit_pi" not in smooth_names(names)
+
+
+@pytest.mark.skipif(not compiler_available(), reason="the ros3p engine needs a C compiler")
+def test_engines_agree_on_the_limiter():
+    a, b = _run("ros3p", I_max=950.0), _run("cvodes", I_max=950.0)
+    kinds = [(e.kind, e.to_mode) for e in a.events]
+    assert ("current_limit", "upper") in kinds and ("current_limit_release", "free") in kinds
+    assert kinds == [(e.kind, e.to_mode) for e in b.events]
+    assert np.allclose([e.t for e in a.events], [e.t for e in b.events], rtol=0, atol=1e-6)
+    assert a.summary()["peak_current_A"] == pytest.approx(b.summary()["peak_current_A"], rel=1e-6)
+
+
+def test_overshoot_integral_state_and_frozen_speed_integrator():
+    r = _run(I_max=950.0, k_pl=0.1, k_il=2.0)
+    i = r.outputs["i_a"]
+    pieces = _acting_intervals(r)
+    assert len(pieces) == 2
+    for ix in pieces:
+        # a limiter of finite bandwidth lets the current overshoot I_max, and lets go below it (u_l = 0 with
+        # a positive integral means k_pl (i - I_max) < 0)
+        assert i[ix].max() > 960.0
+        assert i[ix[-1]] < 950.0
+        q = cumulative_trapezoid(i[ix] - 950.0, r.t[ix], initial=0.0)
+        assert np.max(np.abs(r.states["z_l"][ix] - q)) < 1e-3 * max(1.0, np.max(np.abs(q)))
+        z = r.states["z"][ix]
+        assert np.ptp(z) < 1e-6 * abs(z[0])
+    # between the intervals the limiter's integral is reset and the speed integrator runs
+    gap = np.arange(pieces[0][-1] + 2, pieces[1][0] - 1)
+    assert np.all(r.states["z_l"][gap] == 0.0)
+    assert np.ptp(r.states["z"][gap]) > 0.0
+
+
+def test_a_stiff_limiter_is_the_clamp():
+    p = Parameters(**GIVEN).replace(I_max=800.0)
+    clamp = simulate(p, "macro", 30.0, dt=0.02)
+    for k_pl, k_il, tol in [(10.0, 500.0, 1.0), (30.0, 1000.0, 0.5)]:
+        r = simulate(p.replace(k_pl=k_pl, k_il=k_il), "macro", 30.0, effects=("current_limit_pi",), dt=0.02)
+        tt = np.linspace(0.0, 30.0, 1501)
+        d = np.interp(tt, r.t, r.outputs["i_a"]) - np.interp(tt, clamp.t, clamp.outputs["i_a"])
+        assert np.max(np.abs(d)) < tol, (k_pl, k_il)
+
+
+def test_catalogue_form():
+    form = CATALOGUE["current_limit"].form("pi")
+    assert form.components == ("current_limit_pi",) and form.unsupported_too
+    names = {fp.name for fp in form.parameters}
+    assert names == {"k_pl", "k_il"} and set(form.near) == names
+    starts = form.starts({"I_max": 900.0})
+    assert len(starts) == 8 and all(set(s) == names for s in starts)
