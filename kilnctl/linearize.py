@@ -39,9 +39,9 @@ __all__ = ["linearize", "LinearizedPlant", "OPERATING_MODES"]
 
 #: modes of the moded components at the operating point, per burden condition
 OPERATING_MODES = {"stick": {"ramp": "hold", "burden": "stick", "mesh": "contact", "current_limit": "free",
-                             "voltage_limit": "free"},
+                             "current_limit_pi": "free", "voltage_limit": "free"},
                    "slip": {"ramp": "hold", "burden": "slip_pos", "mesh": "contact", "current_limit": "free",
-                            "voltage_limit": "free"}}
+                            "current_limit_pi": "free", "voltage_limit": "free"}}
 #: outputs of the linear model (names of the plant's output signals) and their units
 OUTPUTS = {"speed_rpm": "rpm", "i_a": "A"}
 

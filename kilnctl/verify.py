@@ -141,7 +141,8 @@ class Verification(Plotted):
         ax2.plot(r.t, r["i_a"], color=COLORS["final"], lw=1.2, label=f"nonlinear {r.model} model")
         kinds = {}
         for e in r.events:
-            if e.component in ("burden", "current_limit", "voltage_limit") and e.kind != "sliding_mode":
+            if (e.component in ("burden", "current_limit", "current_limit_pi", "voltage_limit")
+                    and e.kind != "sliding_mode"):
                 kinds.setdefault((e.component, e.kind), []).append(e.t)
         for n, ((comp, kind), times) in enumerate(kinds.items()):
             ls = (":", "-.", (0, (5, 2, 1, 2)))[n % 3]
@@ -226,7 +227,8 @@ def verify(params: Parameters | None = None, model: str = "macro", t_end: float 
             f"inertia: the burden breaks away at t = {brk[0].t:.2f} s; the motor then sees J_slip = "
             f"{params.J_slip:.2f} kg*m^2 instead of J_stick = {params.J_stick:.2f} kg*m^2, and the wall "
             "friction torque varies with the burden angle, which the linear load-free model does not show")
-    lim = [e for e in nl.events if e.component in ("current_limit", "voltage_limit") and "release" not in e.kind]
+    lim = [e for e in nl.events if e.component in ("current_limit", "current_limit_pi", "voltage_limit")
+           and "release" not in e.kind]
     if lim:
         reasons.append(f"limits: {lim[0].component} reached at t = {lim[0].t:.2f} s "
                        f"({len(lim)} times in all); the linear model has no limits")
