@@ -735,7 +735,7 @@ def diagnosis_summary(d) -> str:
         lines += [x for r in rnd for x in _summary_rows(r, *candidate_verdict(d, i, r))]
     forms = form_verdicts(d)
     if forms:
-        lines += _wrap("other forms of a supported candidate, each against the candidate in its own form", "  ")
+        lines += _wrap("other forms of a candidate, each against the candidate in its own form", "  ")
         lines.append(head)
         lines += [x for e, f, r, verdict, why, against in forms
                   for x in _summary_rows(dataclasses.replace(r, form=f), verdict,
@@ -1208,8 +1208,9 @@ def diagnosis_html(d, figs=None) -> str:
         parts.append(table(header, rows, left=1, selected=sel, wrap=(5, 6)))
     forms = form_verdicts(d)
     if forms:
-        parts.append("<h3>Other forms of a supported candidate</h3><p>A supported candidate with other forms "
-                     "is refitted in each; a form counts on the same evidence as a candidate, judged against the "
+        parts.append("<h3>Other forms of a candidate</h3><p>A supported candidate with other forms is refitted "
+                     "in each (a current limit also when the clamp lowered the BIC without being supported: a "
+                     "limiter of finite bandwidth misses the clamp by hundreds of amperes); a form counts on the same evidence as a candidate, judged against the "
                      "candidate in its own form, and the round judges the candidate in its best form.</p>")
         parts.append(table(header, [_candidate_row(dataclasses.replace(r, form=f), verdict,
                                                    f"as a candidate for {against}: {why}")
