@@ -88,3 +88,33 @@ def test_catalogue_form():
     assert names == {"k_pl", "k_il"} and set(form.near) == names
     starts = form.starts({"I_max": 900.0})
     assert len(starts) == 8 and all(set(s) == names for s in starts)
+
+
+@pytest.mark.parametrize("clamp_dbic, lag_dbic, tried", [
+    (-440.0, -50.0, ["pi"]),   # f10: the clamp lowered BIC unsupported: its pi form is tried; the lag's forms are not
+    (7.9, -50.0, []),          # a clamp that did not lower BIC: nothing tried
+])
+def test_the_pi_form_is_tried_where_the_clamp_lowered_bic_unsupported(clamp_dbic, lag_dbic, tried):
+    # truth: hand-made verdicts; only which forms are refitted is tested (Form.unsupported_too)
+    from types import SimpleNamespace
+
+    from kilnctl.measure.diagnose import Diagnosis
+    from kilnctl.measure.evidence import CandidateResult
+
+    d = Diagnosis(Parameters())
+    d.form_results_ = []
+    own = SimpleNamespace(values_={"mu_c": 0.4, "I_max": 900.0, "tau_s": 0.02}, bic_=0.0, form=None)
+    seen = []
+
+    def calibrate(m, params, effects, scales, mask, init, starts, *a):
+        seen.append(next(f for f in d._forms.values()))
+        return SimpleNamespace(values_=dict(init), bic_=-1.0, form=None)
+
+    d._calibrate = calibrate
+    d._first_failure = lambda *a: None
+    d._evidence = lambda m, e, cal, against, *a: CandidateResult(e, -1.0, 0.0, {}, {}, {}, [], [], False, "", 0.0,
+                                                                 calibration=cal)
+    clamp = CandidateResult("current_limit", clamp_dbic, -71.8, {}, {}, {}, [], [], False, "", 1.0, calibration=own)
+    lag = CandidateResult("speed_sensor_lag", lag_dbic, -1.0, {}, {}, {}, [], [], False, "", 1.0, calibration=own)
+    d._in_best_form(None, None, [], [clamp, lag], own, None, None, None, None, None, lambda s: None)
+    assert seen == tried
