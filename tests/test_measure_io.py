@@ -434,7 +434,7 @@ def test_a_record_resampled_from_a_coarser_logger_is_named():
     motor the plant does not have, and its speed was said to "look like the speed reference".  Truth by
     construction: a start-up of kilnctl's generator at 50 Hz (noise on every sample), the same interpolated and
     held onto a grid four times finer, and the same with its current on 10 A steps (not resampled)."""
-    from kilnctl.measure.io import resampled_every
+    from kilnctl.measure.logger import resampled_every
     from kilnctl.measure.synthetic import make_record
 
     m, _ = make_record((), seed=1, t_end=40.0)
@@ -452,7 +452,7 @@ def test_a_record_resampled_from_a_coarser_logger_is_named():
 def test_a_speed_counted_by_a_coarse_encoder_is_named_with_its_step():
     # truth by construction: a 1024-count encoder read every 20 ms gives the speed in whole steps of
     # 60 / (1024 x 0.02) = 2.9297 rpm; the noisy speed it counted is not quantised, nor is a current on 10 A steps
-    from kilnctl.measure.io import speed_step
+    from kilnctl.measure.logger import speed_step
     from kilnctl.measure.synthetic import DEFAULT_GAINS, make_record
 
     m, _ = make_record(seed=4, t_end=20.0, mismatch=())

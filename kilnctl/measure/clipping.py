@@ -109,8 +109,20 @@ def clipped_levels(arrays, i_max: float | None = None) -> list[ClipLevel]:
 
 
 def unclipped(levels, channels) -> np.ndarray | None:
-    """Mask of the samples where no channel of ``channels`` (dict of str to ndarray) sits at its level in
-    ``levels`` (ClipLevel); None when ``levels`` is empty."""
+    """Mask of the samples where no channel sits at the level the logger clipped it at.
+
+    Parameters
+    ----------
+    levels : sequence of ClipLevel
+        Clipped ends (:func:`clipped_levels`).
+    channels : dict of str to ndarray
+        The record's channels.
+
+    Returns
+    -------
+    ndarray of bool or None
+        True where no channel is clipped; None when ``levels`` is empty.
+    """
     keep = None
     for c in levels:
         at = c.at(channels[c.channel])
@@ -119,8 +131,25 @@ def unclipped(levels, channels) -> np.ndarray | None:
 
 
 def residual(measurement, channel: str, model, active) -> np.ndarray:
-    """Measured minus model of one channel on the samples ``active``, 0 where the logger clipped the record or
-    a spike sits (:attr:`Measurement.kept <kilnctl.measure.io.Measurement.kept>`: no measurement there)."""
+    """Measured minus model of one channel, 0 where the logger clipped the record or a spike sits.
+
+    Parameters
+    ----------
+    measurement : Measurement
+        The record (:attr:`Measurement.kept <kilnctl.measure.io.Measurement.kept>` marks the samples that
+        are measurements).
+    channel : str
+        ``current_A`` or ``speed_rpm``.
+    model : ndarray
+        The model's signal on the samples ``active`` [unit of the channel].
+    active : ndarray of bool
+        The compared samples.
+
+    Returns
+    -------
+    ndarray
+        The residual on the samples ``active`` [unit of the channel].
+    """
     return np.where(measurement.kept[active], measurement.channels[channel][active] - model, 0.0)
 
 
@@ -135,7 +164,26 @@ def _noise(a, at) -> float:
 
 
 def clipped_notes(levels, arrays, t, lines, row_word, labels=None) -> list[str]:
-    """One reader's note per clipped channel: how many samples, where, and what is done with them."""
+    """One reader's note per clipped channel: how many samples, where, and what is done with them.
+
+    Parameters
+    ----------
+    levels : sequence of ClipLevel
+        Clipped ends (:func:`clipped_levels`).
+    arrays : dict of str to ndarray
+        The record's channels.
+    t : ndarray
+        Sample times [s].
+    lines, row_word
+        File line (row) of each sample, and what it counts.
+    labels : dict, optional
+        The record's own column names, for the notes.
+
+    Returns
+    -------
+    list of str
+        The notes.
+    """
     units = {"current_A": "A", "speed_rpm": "rpm"}
     out = []
     for c in levels:

@@ -161,7 +161,20 @@ def glitches(arrays) -> tuple:
 
 
 def glitch_mask(found, n: int) -> np.ndarray:
-    """Mask of the ``n`` samples outside every glitch of ``found``."""
+    """Mask of the samples outside every spike.
+
+    Parameters
+    ----------
+    found : sequence of Glitch
+        Spikes (:func:`glitches`).
+    n : int
+        Number of samples of the record.
+
+    Returns
+    -------
+    ndarray of bool
+        True where no spike sits.
+    """
     keep = np.ones(n, bool)
     for g in found:
         keep[list(g.at)] = False
@@ -169,7 +182,24 @@ def glitch_mask(found, n: int) -> np.ndarray:
 
 
 def glitch_notes(found, arrays, lines, row_word, labels=None) -> list[str]:
-    """One reader's note per channel with spikes: how many, the largest, and that they are left out."""
+    """One reader's note per channel with spikes: how many, the largest, and that they are left out.
+
+    Parameters
+    ----------
+    found : sequence of Glitch
+        Spikes (:func:`glitches`).
+    arrays : dict of str to ndarray
+        The record's channels.
+    lines, row_word
+        File line (row) of each sample, and what it counts.
+    labels : dict, optional
+        The record's own column names, for the notes.
+
+    Returns
+    -------
+    list of str
+        The notes.
+    """
     units = {"current_A": "A", "speed_rpm": "rpm"}
     out = []
     for name in ("current_A", "speed_rpm"):
