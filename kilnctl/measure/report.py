@@ -1210,8 +1210,9 @@ def diagnosis_html(d, figs=None) -> str:
     if forms:
         parts.append("<h3>Other forms of a candidate</h3><p>A supported candidate with other forms is refitted "
                      "in each (a current limit also when the clamp lowered the BIC without being supported: a "
-                     "limiter of finite bandwidth misses the clamp by hundreds of amperes); a form counts on the same evidence as a candidate, judged against the "
-                     "candidate in its own form, and the round judges the candidate in its best form.</p>")
+                     "limiter of finite bandwidth misses the clamp by hundreds of amperes); a form counts on the "
+                     "same evidence as a candidate, judged against the candidate in its own form, and the round "
+                     "judges the candidate in its best form.</p>")
         parts.append(table(header, [_candidate_row(dataclasses.replace(r, form=f), verdict,
                                                    f"as a candidate for {against}: {why}")
                                     for e, f, r, verdict, why, against in forms], left=1,

@@ -342,7 +342,8 @@ class CurrentLimit(Component):
                         # 50 rad/s) is the clamp to 0.7 A on a torque-law start-up limited at 800 A
                         near={"k_pl": 10.0, "k_il": 500.0},
                         # limiter loops of 70 to 1800 rad/s with Table 1's L_a, integral corners 3 and 20 rad/s
-                        starts=lambda v: [{"k_pl": k, "k_il": c * k} for k in (0.03, 0.1, 0.3, 1.0) for c in (3.0, 20.0)],
+                        starts=lambda v: [{"k_pl": k, "k_il": c * k} for k in (0.03, 0.1, 0.3, 1.0)
+                                          for c in (3.0, 20.0)],
                         # a purely proportional limiter (no integral) is a limiter of this form
                         ends={"k_il": "lower"},
                         # the clamp misses such a limiter's overshoot and dip by hundreds of amperes: on red
