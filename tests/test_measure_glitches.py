@@ -79,3 +79,12 @@ def test_spikes_are_no_stick_slip_falls(record):
     keep = glitch_mask(glitches(spiked.channels), spiked.n)[act]
     assert breakaways(spiked.t[act], spiked.current[act], t_from=exp.steady_from).size >= 1
     assert breakaways(spiked.t[act], spiked.current[act], t_from=exp.steady_from, keep=keep).size == 0
+
+
+def test_three_samples_are_an_event_not_a_glitch(record):
+    # truth by construction: a bump of three samples (150, 120, 90 A) is wider than a glitch of one or two
+    clean, _, _ = record
+    cur = clean.current.copy()
+    cur[600:603] += np.array([120.0, 150.0, 90.0])
+    m = Measurement.from_arrays(clean.t, cur, clean.speed, clean.speed_ref)
+    assert m.glitches == ()

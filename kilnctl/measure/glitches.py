@@ -14,7 +14,7 @@ A spike is a sample that lies more than :data:`SPIKE_SIGMAS` noise standard
 deviations from the median of the samples two and three steps either side,
 and more than five times their spread from it; the sample next to it on
 either side is part of the spike when it lies on the same side by more than
-:data:`TAIL_SIGMAS`.  A breakaway's fall, a ramp's corner or a backlash
+:data:`TAIL_SIGMAS` (both so: three samples, an event, no glitch).  A breakaway's fall, a ramp's corner or a backlash
 impact's ringing moves the samples either side too, so the spread test keeps
 them out; a spike the other channel answers (a backlash impact over two
 samples jolts the shaft) is an event, not a glitch; and a spike is at least
@@ -100,14 +100,13 @@ def _channel(a, name: str) -> list[Glitch]:
             continue
         d = float(dev[p - 3])
         m = float(med[p - 3])
-        at = [p]
-        for q in (p - 1, p + 1):
-            if q not in taken and np.sign(a[q] - m) == np.sign(d) and abs(a[q] - m) > TAIL_SIGMAS * sigma:
-                at.append(q)
-                break
-        if len(at) == 2 and abs(a[at[1]] - m) > abs(d):
+        tails = [q for q in (p - 1, p + 1)
+                 if q not in taken and np.sign(a[q] - m) == np.sign(d) and abs(a[q] - m) > TAIL_SIGMAS * sigma]
+        if len(tails) == 2:
+            continue  # three samples or more on one side: an event, not a glitch of one or two samples
+        if tails and abs(a[tails[0]] - m) > abs(d):
             continue  # the neighbour is larger: it is the peak, found on its own
-        at.sort()
+        at = sorted([p] + tails)
         taken.update(at)
         out.append(Glitch(name, tuple(at), p, d, abs(d) / sigma))
     return sorted(out, key=lambda g: g.at[0])
