@@ -113,3 +113,24 @@ def test_no_local_fit_judges_the_structure_at_the_given_values():
     for c in ("current_A", "speed_rpm"):
         direct = float(np.sum((m.channels[c][active] - run.outputs[c]) ** 2))
         assert cal.rss_[c] == pytest.approx(direct, rel=1e-9)
+
+
+@pytest.mark.parametrize("B_o, on_bound", [(6e5, False), (0.0, True)])
+def test_a_value_many_standard_errors_from_a_bound_is_not_on_it(B_o, on_bound):
+    # truth by construction: kilnctl's generator with a viscous drag of 6e5 N*m*s/rad (red team 9's R02: 0.06 %
+    # of the 0-1e9 range, within the old 1e-3 band, tens of standard errors above 0), and without one (the fit
+    # ends at the bound 0)
+    from kilnctl.measure.calibrate import Calibration
+    from kilnctl.measure.effects import CATALOGUE
+    from kilnctl.measure.synthetic import DEFAULT_GAINS, make_record
+
+    setup = resolve_gains(Parameters(DEFAULT_GAINS))
+    hidden = ("viscous_drag",) if B_o else ()
+    m, _ = make_record(hidden, seed=7, t_end=20.0, magnitudes={"B_o": B_o} if B_o else None)
+    free = ["mu_c", "m_v", *CATALOGUE["viscous_drag"].parameters]
+    cal = Calibration(setup, free, effects=("viscous_drag",)).fit(m, init={"B_o": 3e5}, n_local=1)
+    if on_bound:
+        assert "B_o" in cal.on_bound_
+    else:
+        assert cal.values_["B_o"] == pytest.approx(B_o, rel=0.2)
+        assert cal.values_["B_o"] > 5 * cal.stderr_["B_o"] and "B_o" not in cal.on_bound_

@@ -164,6 +164,12 @@ def test_html_gives_the_unexplained_account_once_a_sentence_a_paragraph():
     assert f"<p>{first}.</p><p>Suggests{second}</p>" in text
     assert text.count("5.47 A") == 1  # not repeated in the warning at the top
     assert "<b>Unexplained:</b> no structure beyond noise (the whole account" in text
+    # with nothing selected the headline says the hint itself: the warning points to it instead of repeating it
+    # (red team 9's R09 read the same sentence twice at the top of the page)
+    d.selected_ = []
+    text = html.unescape(report.diagnosis_html(d, figs))
+    assert text.count("no structure beyond noise") == 2  # the headline and the account below
+    assert "<b>Unexplained:</b> the structure the headline names (the whole account" in text
 
 
 def backward_built():

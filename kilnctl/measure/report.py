@@ -1228,9 +1228,14 @@ def diagnosis_html(d, figs=None) -> str:
     misses = (d.unexplained_ or d.signature_)["text"]
     parts.append("<h2>What the final model still misses</h2>"
                  + "".join(f"<p>{esc(x)}</p>" for x in re.split(r"(?<=\.) (?=[A-Za-z])", misses)))
-    warnings = ([("Unexplained", f"{d.unexplained_['hint']} (the whole account: \"What the final model still "
-                                 "misses\" below)")] if d.unexplained_ else []) + [("Caution", c) for c in d.caveats_]
-    return report_page(f"Diagnosis of {record_name_of(d.measurement_.source)}", diagnosis_plain_headline(d), parts,
+    headline = diagnosis_plain_headline(d)
+    # the hint once on the page: when the headline already says it, the warning points to it (red team 9)
+    hint = d.unexplained_["hint"] if d.unexplained_ else ""
+    said = hint and hint in headline
+    warnings = ([("Unexplained", ("the structure the headline names" if said else hint)
+                  + " (the whole account: \"What the final model still misses\" below)")] if d.unexplained_ else []) \
+        + [("Caution", c) for c in d.caveats_]
+    return report_page(f"Diagnosis of {record_name_of(d.measurement_.source)}", headline, parts,
                        warnings=warnings, terms=("fit", "dbic", "heldout", "cautions", "uncertainty", "sigma"),
                        values={"min_delta_bic": d.min_delta_bic, "min_holdout_gain": d.min_holdout_gain,
                                "holdout_z": d.holdout_z},

@@ -190,8 +190,12 @@ def _shaft_orders(f_hz: float, df_hz: float, speed_rpm, t, n: float, steady_from
 
     A vibration at a whole multiple of a shaft's speed comes from that shaft: a gear's tooth passing (the girth
     gear's Z teeth at Z times the kiln's speed), a run-out.  The spectrum resolves ``df_hz`` (0.1 Hz with its
-    10 s segments), so the order is given with its spread, half that step: about +-6 on a kiln turning once in
-    129 s."""
+    10 s segments), so each order is given with its spread, half that step.  The motor's order is resolved (a
+    few hundredths); it is called whole only within its spread.  The kiln's is not on a start-up record (about
+    +-6 on a kiln turning once in 129 s: every frequency lies that close to a whole multiple), so the hint
+    gives it as the tooth count that would make it, for the user to compare with the girth gear's, and does not
+    say it is whole (red team 9: "1602 (+-6) times the kiln's ... it comes from that shaft" for a loop's
+    ringing)."""
     if steady_from is None:
         return ""
     steady = np.asarray(speed_rpm)[np.asarray(t) >= steady_from]
@@ -199,10 +203,23 @@ def _shaft_orders(f_hz: float, df_hz: float, speed_rpm, t, n: float, steady_from
         return ""
     f_motor = float(np.median(steady)) / 60.0
     f_kiln = f_motor / n
-    spread = 0.5 * df_hz / f_kiln
-    return (f"; it is {f_hz / f_motor:.2f} times the motor's rotation ({f_motor:.2f} Hz) and about "
-            f"{f_hz / f_kiln:.0f} (+-{spread:.0f}) times the kiln's ({1.0 / f_kiln:.0f} s a turn): at a whole "
-            f"multiple of a shaft's speed it comes from that shaft (a gear's tooth passing, a run-out)")
+    spread_m = 0.5 * df_hz / f_motor
+    spread_k = 0.5 * df_hz / f_kiln
+    order_m = f_hz / f_motor
+    whole_m = round(order_m) >= 1 and abs(order_m - round(order_m)) <= spread_m
+    motor = (f"; it is {order_m:.2f} times the motor's rotation ({f_motor:.2f} Hz): at a whole multiple of the "
+             f"motor's speed it comes from that shaft (a run-out, a gear's tooth passing on the motor side)" if whole_m
+             else f"; it is {order_m:.2f} times the motor's rotation ({f_motor:.2f} Hz), no whole multiple")
+    order_k = f_hz / f_kiln
+    if spread_k < 0.5:
+        kiln = (f", and {order_k:.0f} times the kiln's ({1.0 / f_kiln:.0f} s a turn)"
+                + (": a whole multiple, as a girth gear's tooth passing" if abs(order_k - round(order_k)) <= spread_k
+                   else ""))
+    else:
+        kiln = (f", and about {order_k:.0f} (+-{spread_k:.0f}) times the kiln's ({1.0 / f_kiln:.0f} s a turn), "
+                "which this record cannot tell from a whole multiple: a girth gear of that many teeth would make it "
+                "(compare with the drive's)")
+    return motor + kiln
 
 
 def residual_signature(comp: Comparison, n: float, steady_from: float | None = None) -> dict:

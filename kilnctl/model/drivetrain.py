@@ -67,9 +67,9 @@ def _no_ring(values, params) -> str | None:
     if zeta < RING_DAMPING:
         return None
     f_hz = math.sqrt(values["k_po"] / _mode_inertia(params)) / (2 * math.pi)
-    return (f"its fitted drive train is damped at {zeta:.2g} of its {f_hz:.3g} Hz mode (from {RING_DAMPING:g} on a "
-            f"step overshoots by less than 5 %): it cannot ring, which is what a torsional compliance shows, and "
-            f"acts as a lag between motor and kiln, standing in for another difference")
+    return (f"its fitted drive train has a damping ratio of {zeta:.2g} at its {f_hz:.3g} Hz mode (from "
+            f"{RING_DAMPING:g} on a step overshoots by less than 5 %): it cannot ring, which is what a torsional "
+            f"compliance shows, and acts as a lag between motor and kiln, standing in for another difference")
 
 
 def _compliance_starts(params) -> list[dict]:
