@@ -1051,7 +1051,7 @@ def test_final_check_removes_a_compliance_whose_final_values_cannot_ring():
     assert selected == ["speed_sensor_lag"]
     (r,) = dropped
     assert r.effect == "drivetrain_compliance" and not r.supported and r.stand_in
-    assert f"damped at {zeta:.2g} of its" in r.reason and "keeping it: dBIC -182.0" in r.reason
+    assert f"a damping ratio of {zeta:.2g} at its" in r.reason and "keeping it: dBIC -182.0" in r.reason
     selected, _, dropped = check(2.0e8, 2.0e6)  # zeta 0.017: a drive train that rings
     assert selected == ["speed_sensor_lag", "drivetrain_compliance"] and dropped == []
 

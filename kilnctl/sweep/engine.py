@@ -186,14 +186,25 @@ class _Local:
         # minutes, and the pool's shutdown could wait on a worker forever). The pool keeps its processes
         # in a private dict; Python 3.14 has ProcessPoolExecutor.terminate_workers for this.
         procs = list((getattr(self.pool, "_processes", None) or {}).values())
-        self.pool.shutdown(wait=False, cancel_futures=True)
-        for proc in procs:
-            proc.terminate()
-        for proc in procs:
-            proc.join(timeout=5)
-            if proc.is_alive():
-                proc.kill()
+        # the pool's manager thread, finding its workers gone and its pipes closed, can die with "OSError: [Errno
+        # 9] Bad file descriptor" (a CI run printed it after "kilnctl sweep: interrupted"): that thread's
+        # exception is not the user's business, and it is waited for so nothing prints after the message
+        manager = getattr(self.pool, "_executor_manager_thread", None)
+        hook = threading.excepthook
+        threading.excepthook = lambda args: None if args.thread is manager else hook(args)
+        try:
+            self.pool.shutdown(wait=False, cancel_futures=True)
+            for proc in procs:
+                proc.terminate()
+            for proc in procs:
                 proc.join(timeout=5)
+                if proc.is_alive():
+                    proc.kill()
+                    proc.join(timeout=5)
+            if manager is not None:
+                manager.join(timeout=5)
+        finally:
+            threading.excepthook = hook
 
 
 class _Dask:
