@@ -14,12 +14,13 @@ A spike is a sample that lies more than :data:`SPIKE_SIGMAS` noise standard
 deviations from the median of the samples two and three steps either side,
 and more than five times their spread from it; the sample next to it on
 either side is part of the spike when it lies on the same side by more than
-:data:`TAIL_SIGMAS` (both so: three samples, an event, no glitch).  A breakaway's fall, a ramp's corner or a backlash
-impact's ringing moves the samples either side too, so the spread test keeps
-them out; a spike the other channel answers (a backlash impact over two
-samples jolts the shaft) is an event, not a glitch; and a spike is at least
-:data:`MIN_SHARE` of the channel's range (where the noise is tiny, a kink is
-thousands of its standard deviations).
+:data:`TAIL_SIGMAS` (both so: three samples, an event, no glitch).  A
+breakaway's fall, a ramp's corner or a backlash impact's ringing moves the
+samples either side too, so the spread test keeps them out; a spike the
+other channel answers (a backlash impact over two samples jolts the shaft)
+is an event, not a glitch; and a spike is at least :data:`MIN_SHARE` of the
+channel's range (where the noise is tiny, a kink is thousands of its
+standard deviations).
 """
 
 from __future__ import annotations

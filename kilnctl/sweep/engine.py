@@ -187,7 +187,7 @@ class _Local:
         # in a private dict; Python 3.14 has ProcessPoolExecutor.terminate_workers for this.
         procs = list((getattr(self.pool, "_processes", None) or {}).values())
         # the pool's manager thread, finding its workers gone and its pipes closed, can die with "OSError: [Errno
-        # 9] Bad file descriptor" (a CI run printed it after "kilnctl sweep: interrupted"): that thread's
+        # 9] Bad file descriptor" (a test run printed it after "kilnctl sweep: interrupted"): that thread's
         # exception is not the user's business, and it is waited for so nothing prints after the message
         manager = getattr(self.pool, "_executor_manager_thread", None)
         hook = threading.excepthook
