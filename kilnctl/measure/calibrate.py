@@ -1090,9 +1090,10 @@ class Calibration:
         if p and near.any():
             # a value within 1e-3 of a wide range from a bound, but many of its standard errors away from it, did
             # not stop there (red team 9: B_o 6.08e5 of 0-1e9, 18 standard errors above 0, read as "the fit
-            # wanted to go further"): on the bound is within two standard errors (in the optimizer's scaling)
-            with np.errstate(invalid="ignore"):
-                se_u = np.sqrt(np.clip(np.diag(s2 * np.linalg.pinv(J.T @ J)), 0.0, None))
+            # wanted to go further"): on the bound is within two standard errors (in the optimizer's scaling, by
+            # the same covariance rule as the reported errors; a coordinate on a singular direction stays on it)
+            cov_u, singular_u = _covariance(J, s2, np.eye(p))
+            se_u = np.where(singular_u, np.inf, np.sqrt(np.clip(np.diag(cov_u), 0.0, None)))
             gap = np.minimum(u - space.lower, space.upper - u)
             near &= ~(np.isfinite(se_u) & (gap > 2.0 * se_u))
         self.on_bound_ = sorted({self._coord_owner(space, j) for j in np.nonzero(near)[0]})
