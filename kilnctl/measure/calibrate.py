@@ -30,13 +30,12 @@ from ..errors import KilnctlError, ModelError, NotFittedError, name_list
 from ..params import Parameters
 from ..simulate import resolve_gains
 from .breakaways import BreakawayTiming
-from .glitches import glitch_mask
 from .effects import DEFAULT_CALIBRATE, FreeParameter, free_parameter
 from .io import Experiment, Measurement
 from .runner import CHANNELS, ModelRun, run_model
 from .stats import fit_percent
 
-__all__ = ["Calibration", "Starts", "Horizons", "Smoothing", "default_starts", "holdout_masks", "bic", "sweep"]
+__all__ = ["Calibration", "Starts", "Horizons", "Smoothing", "default_starts", "holdout_masks", "bic", "sweep", "unspiked"]
 
 #: a trial run slower than this many times the median run [-] (and than MIN_LIMIT_S [s]) counts as failed:
 #: a destabilised loop that chatters is a poor fit, and the optimizer is steered away from it
@@ -95,6 +94,24 @@ def holdout_masks(measurement: Measurement, kind: str = "blocks", fraction: floa
     else:
         raise ModelError(f"unknown hold-out kind {kind!r}: choose 'blocks' or 'tail'")
     return active & ~test, test
+
+
+def unspiked(measurement) -> np.ndarray:
+    """The record's samples outside the logger's spikes.
+
+    Parameters
+    ----------
+    measurement : Measurement
+        The record (:attr:`Measurement.unspiked <kilnctl.measure.io.Measurement.unspiked>`); a stand-in
+        without the reader's checks has no spikes.
+
+    Returns
+    -------
+    numpy.ndarray of bool
+        One entry per sample, False inside a spike: where stick-slip falls are looked for.
+    """
+    keep = getattr(measurement, "unspiked", None)
+    return np.ones(measurement.n, bool) if keep is None else keep
 
 
 def _kept(measurement) -> np.ndarray:
@@ -233,7 +250,7 @@ class _Problem:
         self.mask = ((mask if mask is not None else np.ones(measurement.n, bool)) & _kept(measurement))[active]
         self.meas = {c: measurement.channels[c][active] for c in CHANNELS}
         # the samples outside the record's spikes, where its stick-slip falls are looked for
-        self.unspiked = glitch_mask(getattr(measurement, "glitches", ()), measurement.n)[active]
+        self.unspiked = unspiked(measurement)[active]
         self.scales = scales
         self.walls: list[float] = []
         self.n_failed = 0

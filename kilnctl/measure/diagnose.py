@@ -48,12 +48,11 @@ import numpy as np
 from ..errors import KilnctlError, ModelError, NotFittedError, WorkerError, close_matches_hint, name_list
 from ..params import Parameters
 from ..simulate import resolve_gains
-from .calibrate import Calibration, Smoothing, default_starts, holdout_masks
+from .calibrate import Calibration, Smoothing, default_starts, holdout_masks, unspiked
 from .compare import compare_run
 from .effects import CATALOGUE, DEFAULT_CALIBRATE, effect_components, grid_starts
 from .breakaways import breakaways
 from .clipping import residual as clipped_residual
-from .glitches import glitch_mask
 from .cautions import caution_texts, effect_cautions, setup_cautions, skew_texts
 from .io import Measurement
 from .evidence import CandidateResult, close_rival, judge
@@ -1693,7 +1692,7 @@ def _falls(m, exp):
     """The record's sharp falls of the current after the ramp (:func:`~kilnctl.measure.breakaways.breakaways`:
     stick-slip breakaways), its spikes left out (a spike falls back as sharply)."""
     active = m.t >= exp.t0 - 1e-9
-    keep = glitch_mask(getattr(m, "glitches", ()), m.n)[active]
+    keep = unspiked(m)[active]
     return breakaways(m.t[active], m.current[active], t_from=exp.steady_from, keep=keep)
 
 

@@ -225,10 +225,16 @@ class Measurement:
         return np.ones(self.t.size, bool) if keep is None else keep
 
     @property
+    def unspiked(self) -> np.ndarray:
+        """Mask of the samples outside the logger's spikes (:attr:`glitches`): where stick-slip falls are
+        looked for (a spike falls back as sharply as a breakaway)."""
+        return glitch_mask(self.glitches, self.t.size)
+
+    @property
     def kept(self) -> np.ndarray:
         """Mask of the samples fits, evidence, fit % and failing intervals use: none clipped (:attr:`unclipped`)
-        and none in a spike (:attr:`glitches`)."""
-        return self.unclipped & glitch_mask(self.glitches, self.t.size)
+        and none in a spike (:attr:`unspiked`)."""
+        return self.unclipped & self.unspiked
 
     @property
     def n(self) -> int:
