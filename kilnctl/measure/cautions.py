@@ -192,7 +192,8 @@ def effect_cautions(d, m, exp, params) -> list[str]:
         if not any(r is a for a in judged):  # a pair added both its effects: its rivals are named once
             judged.append(r)
             out += rival_texts(d, r)
-        for note in eff.plausibility(d.final_calibration_.values_):
+        # the usual ranges scaled to this drive at the recorded set speed
+        for note in eff.plausibility(d.final_calibration_.values_, params.replace(omega_ref=exp.omega_ref)):
             out.append(f"{name}: {note} (a value outside the usual range is reported, not refused)")
     return out + drift_texts(d, params)
 

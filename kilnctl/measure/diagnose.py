@@ -1200,7 +1200,7 @@ class Diagnosis:
                 time.perf_counter() - t_start
         # global phase: a coarse grid over the effect's parameters (base at its calibrated values),
         # since output-error costs of impacts and stick-slip cycles have many local minima
-        effect_starts = grid_starts(eff.parameters, eff.grid_points) + list(eff.starts(p, m)) + eff.usual_starts()
+        effect_starts = grid_starts(eff.parameters, eff.grid_points) + list(eff.starts(p, m)) + eff.usual_starts(p)
         if name == "torque_friction_law":
             effect_starts = _torque_law_starts(init.get("mu_c", p.mu_c))
         if name != PAIRED and self._rugged(tuple(selected)):
@@ -1682,7 +1682,7 @@ def _search_summary(cal: Calibration) -> dict:
 def _with_friction(law: list, eff, p, m) -> list[dict]:
     """A few of the effect's own starts (:data:`PAIRED_STARTS`, evenly chosen), each with every third point
     of the friction grid ``law``."""
-    own = eff.usual_starts() + list(eff.starts(p, m))
+    own = eff.usual_starts(p) + list(eff.starts(p, m))
     own = [own[i] for i in np.unique(np.linspace(0, len(own) - 1, PAIRED_STARTS).round().astype(int))] \
         if own else [{}]
     return [dict(f, **g) for f in law[::3] for g in own]

@@ -15,7 +15,8 @@ from typing import Callable
 
 from ..params import SPECS, Parameters
 
-__all__ = ["FreeParameter", "Form", "Effect"]
+__all__ = ["FreeParameter", "Form", "Effect", "motor_scale", "motor_torque_scale", "kiln_torque_scale", "drag_scale",
+           "kiln_inertia_scale"]
 
 
 @dataclass(frozen=True)
@@ -115,6 +116,50 @@ class Form:
     unsupported_too: bool = False
 
 
+def _table1() -> Parameters:
+    """The paper's drive (Table 1 and the defaults), against which the usual ranges are written."""
+    global _TABLE1
+    if _TABLE1 is None:
+        _TABLE1 = Parameters()
+    return _TABLE1
+
+
+_TABLE1: Parameters | None = None
+
+
+def motor_scale(params: Parameters) -> tuple[float, str]:
+    """Scale of a motor-side inertia: the motor's own, J_m / J_m of Table 1 [-]."""
+    return params.J_m / _table1().J_m, "J_m"
+
+
+def motor_torque_scale(params: Parameters) -> tuple[float, str]:
+    """Scale of a motor-side torque: the motor's torque at its current limit, k_i I_max, over Table 1's [-]."""
+    t1 = _table1()
+    return params.k_i * params.I_max / (t1.k_i * t1.I_max), "k_i I_max"
+
+
+def kiln_torque_scale(params: Parameters) -> tuple[float, str]:
+    """Scale of a torque on the kiln: the burden's weight times its arm, m_v L, over Table 1's [-] (the kiln's
+    running torque is m_v g L sin(psi))."""
+    t1 = _table1()
+    return params.m_v * params.L / (t1.m_v * t1.L), "m_v L"
+
+
+def drag_scale(params: Parameters) -> tuple[float, str]:
+    """Scale of a viscous drag on the kiln: a torque of the kiln's scale (:func:`kiln_torque_scale`) at the
+    kiln's set speed omega_ref / n, over Table 1's [-]."""
+    t1 = _table1()
+    return (kiln_torque_scale(params)[0] * (t1.omega_ref / t1.n) / (params.omega_ref / params.n),
+            "m_v L over the kiln's speed")
+
+
+def kiln_inertia_scale(params: Parameters) -> tuple[float, str]:
+    """Scale of a stiffness or damping at the kiln axis: the kiln's inertia J_o + J_v over Table 1's [-] (the
+    same mode frequency and damping ratio)."""
+    t1 = _table1()
+    return (params.J_o + params.J_v) / (t1.J_o + t1.J_v), "J_o + J_v"
+
+
 @dataclass(frozen=True)
 class Effect:
     """One physical effect of the catalogue.
@@ -181,6 +226,12 @@ class Effect:
         mode to show).  A candidate whose refit ends there is not supported:
         it stands in for a difference the catalogue may lack.  Physics, not a
         usual range: it holds for any magnitude.
+    scale : callable or None
+        ``scale(params) -> (factor, how)``: the :attr:`plausible` ranges
+        describe drives like the paper's (Table 1); for another kiln or
+        motor they are multiplied by ``factor`` (1 for Table 1), ``how``
+        saying with what they scale (``"J_m"``).  None: absolute ranges (a
+        sensor's lag, a backlash gap).
     forms : tuple of Form
         Other forms of the effect, each tried when the effect is a supported
         candidate (a second-order speed filter or a delay for the
@@ -219,6 +270,27 @@ class Effect:
     contradicts: Callable | None = field(repr=False, default=None)
     spread: str | None = None
     forms: tuple = ()
+    scale: Callable | None = field(repr=False, default=None)
+
+    def usual(self, name: str, params: Parameters | None = None) -> tuple[float, float]:
+        """The usual range of parameter ``name`` [its unit] for the drive of ``params`` (Table 1's without).
+
+        Parameters
+        ----------
+        name : str
+            A parameter of :attr:`plausible`.
+        params : Parameters, optional
+            The setup; the range is scaled by :attr:`scale` (phases and relative ranges are not).
+
+        Returns
+        -------
+        (float, float)
+        """
+        lo, hi = self.plausible[name]
+        if params is None or self.scale is None or name.startswith("phi") or name in self.relative_plausible:
+            return lo, hi
+        factor = float(self.scale(params)[0])
+        return lo * factor, hi * factor
 
     def form(self, name: str | None) -> Form | None:
         """The other form called ``name`` (:attr:`forms`), or None when the effect has none of that name (or
@@ -244,7 +316,7 @@ class Effect:
                 return f"the base already has {k} = {v!r}"
         return None
 
-    def plausibility(self, values: dict) -> list[str]:
+    def plausibility(self, values: dict, params: Parameters | None = None) -> list[str]:
         """Say in words which fitted values lie outside the usual range of real drives.
 
         The ranges (:attr:`plausible`) only describe typical kilns: a value
@@ -256,29 +328,41 @@ class Effect:
         ----------
         values : dict of str to float
             Fitted values [unit of each parameter].
+        params : Parameters, optional
+            The setup: the ranges are scaled to its drive (:meth:`usual`); without it, Table 1's.
 
         Returns
         -------
         list of str
-            E.g. ``"J_m2 = 8 kg*m^2, below the usual 10-45 kg*m^2"``.
+            E.g. ``"J_m2 = 8 kg*m^2, below the usual 10-45 kg*m^2"``; a scaled range says from what
+            (``"... the usual 1.6-7.3 kg*m^2 (the paper's 10-45 scaled with J_m)"``).
         """
         out = []
-        for name, (lo, hi) in self.plausible.items():
+        for name, (lo0, hi0) in self.plausible.items():
             if name not in values or name.startswith("phi") or name in self.relative_plausible:
                 continue
+            lo, hi = self.usual(name, params)
             v = float(values[name])
             unit = SPECS[name].unit if name in SPECS else ""
             unit = "" if unit in ("-", "") else " " + unit
+            how = ""
+            if (lo, hi) != (lo0, hi0):
+                how = f" (the paper's {lo0:g}-{hi0:g} scaled with {self.scale(params)[1]})"
             if v < lo:
-                out.append(f"{name} = {v:.3g}{unit}, below the usual {lo:g}-{hi:g}{unit}")
+                out.append(f"{name} = {v:.3g}{unit}, below the usual {lo:.2g}-{hi:.2g}{unit}{how}")
             elif v > hi:
-                out.append(f"{name} = {v:.3g}{unit}, above the usual {lo:g}-{hi:g}{unit}")
+                out.append(f"{name} = {v:.3g}{unit}, above the usual {lo:.2g}-{hi:.2g}{unit}{how}")
         return out
 
-    def usual_starts(self) -> list[dict]:
+    def usual_starts(self, params: Parameters | None = None) -> list[dict]:
         """Starting points from the usual ranges: each end, their middle, 0.3 x the lower and 3 x the upper end.
 
         The usual range guides the search; the bounds stay wide, so a value outside it is found too.
+
+        Parameters
+        ----------
+        params : Parameters, optional
+            The setup: the ranges are scaled to its drive (:meth:`usual`); without it, Table 1's.
 
         Returns
         -------
@@ -287,9 +371,10 @@ class Effect:
             phases, are skipped.
         """
         out = []
-        for name, (lo, hi) in self.plausible.items():
+        for name in self.plausible:
             if name.startswith("phi") or name in self.relative_plausible:
                 continue
+            lo, hi = self.usual(name, params)
             mid = math.sqrt(lo * hi) if lo > 0 else 0.5 * (lo + hi)
             fp = next((f for f in self.parameters if f.name == name), None)
             for v in (0.3 * lo, lo, mid, hi, 3.0 * hi):

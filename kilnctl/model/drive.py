@@ -30,7 +30,7 @@ import numpy as np
 from ..params import param
 from ..units import RPM_PER_RAD_S
 from .base import Component, Guard, register
-from .catalogue import Effect, Form, FreeParameter
+from .catalogue import Effect, Form, FreeParameter, motor_scale
 
 
 def _peak_current(m) -> float:
@@ -277,7 +277,7 @@ class SecondMotor(Component):
             "current above the model while the drive accelerates (the ramp), by J_m2 x acceleration / k_i, "
             "and a step down when the ramp ends; no error at constant speed",
             starts=lambda params, m: [{"J_m2": params.J_m}, {"J_m2": 0.3 * params.J_m}, {"J_m2": 3 * params.J_m}],
-            plausible={"J_m2": (10.0, 45.0)}, null={"J_m2": 0.0}),
+            plausible={"J_m2": (10.0, 45.0)}, null={"J_m2": 0.0}, scale=motor_scale),
     )
     requires = ("dc_motor",)
 

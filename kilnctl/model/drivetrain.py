@@ -15,7 +15,7 @@ import numpy as np
 
 from ..params import Parameters, param
 from .base import Component, Guard, register
-from .catalogue import Effect, Form, FreeParameter
+from .catalogue import Effect, Form, FreeParameter, kiln_inertia_scale
 
 #: scale of the mesh deflection in guards [m]
 DS_SCALE = 1e-4
@@ -167,6 +167,7 @@ class DrivetrainCompliance(Component):
             "change of torque: ramp start, ramp end, burden breakaway",
             starts=lambda params, m: _compliance_starts(params),
             plausible={"k_po": (5e7, 5e8), "C_po": (2e6, 2e7)}, grid_points=0, contradicts=_no_ring, spread="k_po",
+            scale=kiln_inertia_scale,
             notes="started from a grid in stiffness (fine: the mode frequency must match) times damping ratios "
                   "0.03-0.6 of the mode between the motor side and the kiln."),
     )

@@ -14,7 +14,7 @@ import casadi as ca
 
 from ..params import param
 from .base import Component, register
-from .catalogue import Effect, Form, FreeParameter
+from .catalogue import Effect, Form, FreeParameter, drag_scale, kiln_torque_scale
 
 
 def _sensed(e, rate):
@@ -194,6 +194,7 @@ class KilnUnbalance(Component):
             "about 130 s at 500 rpm): in a short record, a slowly rising or falling offset",
             starts=lambda params, m: [{"T_unb": 1e4, "phi_unb": 0.0}],
             plausible={"T_unb": (1e5, 4e5), "phi_unb": (0.0, 2 * math.pi)}, null={"T_unb": 0.0, "phi_unb": 0.0},
+            scale=kiln_torque_scale,
             period=lambda params, omega_ref: 60.0 * params.n / omega_ref,  # one kiln revolution at the set speed
             short_record_note="a slow drift, which a current-sensor offset or gain error, or slowly correlated "
                               "noise, also produce",
@@ -278,7 +279,7 @@ class ViscousDrag(Component):
             "current above the model in proportion to the speed: growing along the ramp, then a constant "
             "offset at steady speed (which alone a burden mass or friction change could also explain)",
             starts=lambda params, m: [{"B_o": 1e5}, {"B_o": 3e6}],
-            plausible={"B_o": (2e6, 1e7)}, null={"B_o": 0.0}),
+            plausible={"B_o": (2e6, 1e7)}, null={"B_o": 0.0}, scale=drag_scale),
     )
     requires = ("kiln",)
 

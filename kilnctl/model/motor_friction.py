@@ -34,7 +34,7 @@ import casadi as ca
 
 from ..params import param
 from .base import Component, Guard, register
-from .catalogue import Effect, FreeParameter
+from .catalogue import Effect, FreeParameter, motor_torque_scale
 
 #: motor speed over which the smooth twin regularises the friction's sign, and the scale of the stick guards
 #: [rad/s]
@@ -74,7 +74,7 @@ class MotorCoulombFriction(Component):
             "the ramp and at steady speed (a viscous drag instead grows with the speed), and a motor that "
             "starts a little late, once the current has reached T_cm/k_i",
             starts=lambda params, m: [{"T_cm": 20.0}, {"T_cm": 60.0}, {"T_cm": 200.0}],
-            plausible={"T_cm": (10.0, 100.0)}, null={"T_cm": 0.0}),
+            plausible={"T_cm": (10.0, 100.0)}, null={"T_cm": 0.0}, scale=motor_torque_scale),
     )
 
     def initial_mode(self, params, x0):
