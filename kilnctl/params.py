@@ -38,7 +38,8 @@ from .errors import ConfigFileError, ParameterError, close_matches_hint
 from .files import read_toml, write_atomic
 
 __all__ = ["ParamSpec", "Parameters", "SPECS", "GROUPS", "param", "RegistryView", "Implausible",
-           "plausibility", "check_plausible", "HARD_FACTOR", "SLIP_FACTOR"]
+           "plausibility", "check_plausible", "HARD_FACTOR", "SLIP_FACTOR", "fold_motors", "MOTORS_KEY",
+           "FOLDED_BY_MOTORS"]
 
 #: rules a numeric value may be held to
 _RULES = {
@@ -199,6 +200,59 @@ def _declarations(registry) -> dict[str, ParamSpec]:
 SPECS: Mapping[str, ParamSpec] = RegistryView(_declarations)
 #: the section of an experiment's setup file that holds measurement options, not parameters (docs/measurements.md)
 MEASUREMENT_SECTION = "measurement"
+#: key of a setup file's ``[motor]`` section: how many identical motors drive the kiln together
+#: (:func:`fold_motors`)
+MOTORS_KEY = "motors"
+#: the parameters of one motor that a drive of several identical motors multiplies (torque per ampere of the
+#: logged motor, rotor inertia, viscous friction)
+FOLDED_BY_MOTORS = ("k_i", "J_m", "B_m")
+
+
+def fold_motors(flat: dict, where: str) -> dict:
+    """Fold a drive of several identical motors into the model's one motor.
+
+    A large kiln is often driven by two motors, each on its own pinion (or
+    both on one shaft), fed alike by one speed controller, and the logger
+    records one motor's armature current.  With ``motors = N`` in the
+    setup's ``[motor]`` section and one motor's nameplate values there, each
+    motor carries the same current i_a: the drive's torque is N k_i i_a, its
+    rotor inertia N J_m and its viscous friction N B_m at the motor speed,
+    while every motor's armature circuit (R_a, L_a, k_b) and the current
+    limit I_max stay those of one motor.  So k_i, J_m and B_m are multiplied
+    by N and the model stays the paper's; an effect fitted on the motor side
+    (J_m2, T_cm) is then that of all N motors together.
+
+    Parameters
+    ----------
+    flat : dict
+        The setup's keys, sections flattened; ``motors`` is taken out.
+    where : str
+        The file, for the message.
+
+    Returns
+    -------
+    dict
+        ``flat`` with k_i, J_m and B_m (given or default) multiplied by the number of motors.
+
+    Raises
+    ------
+    ConfigFileError
+        ``motors`` is not a whole number of 1 or more.
+    """
+    if MOTORS_KEY not in flat:
+        return flat
+    motors = flat.pop(MOTORS_KEY)
+    if isinstance(motors, bool) or not isinstance(motors, int) or motors < 1:
+        raise ConfigFileError(f"{where}: [motor] {MOTORS_KEY} = {motors!r} must be a whole number of identical motors "
+                              "driving the kiln together, 1 or more (with one motor's R_a, L_a, k_i, k_b, J_m, B_m "
+                              "and I_max in [motor] and [drive]; the record logs one motor's current)")
+    defaults = Parameters()  # (builds the registry of every component's parameters)
+    for k in FOLDED_BY_MOTORS:
+        value = flat.get(k, defaults[k])
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            continue  # refused with its own message when the parameters are built
+        flat[k] = motors * value
+    return flat
 
 #: TOML section order
 GROUPS: tuple[str, ...] = ("motor", "controller", "drive", "kiln", "gear", "coupling", "effects")
@@ -622,7 +676,9 @@ class Parameters(Mapping):
 
         Keys may stand at the top level or inside any of the sections
         ``[motor]``, ``[controller]``, ``[drive]``, ``[kiln]``, ``[gear]``,
-        ``[coupling]``, ``[effects]``; missing keys keep their defaults.  The
+        ``[coupling]``, ``[effects]``; missing keys keep their defaults.
+        ``motors = N`` in ``[motor]`` folds N identical motors into the
+        model's one (:func:`fold_motors`).  The
         ``[measurement]`` section of an experiment's setup file
         (``docs/measurements.md``) is skipped: it is read by the measurement
         tools (:func:`kilnctl.measure.load_setup`), so one setup serves
@@ -661,6 +717,6 @@ class Parameters(Mapping):
             else:
                 flat[key] = value
         try:
-            return cls(flat)
+            return cls(fold_motors(flat, str(path)))
         except ParameterError as exc:
             raise ParameterError(f"{path}: {exc}") from None

@@ -32,12 +32,12 @@ import numpy as np
 
 from ..errors import ConfigFileError, DataError, ParameterError, close_matches_hint
 from ..files import read_toml
-from ..params import GROUPS, SPECS, Parameters
+from ..params import GROUPS, SPECS, Parameters, fold_motors
 from ..units import RPM_PER_RAD_S
 from .clipping import clipped_levels, clipped_notes, unclipped
 from .glitches import glitch_mask, glitch_notes, glitches
 from .logger import frozen_notes, resampled_every, resampled_notes, sampling_notes, speed_step_notes
-from .reference import fit_scurve
+from .reference import fit_knots, fit_scurve, scurve_values
 
 __all__ = ["Measurement", "Setup", "Experiment", "read_csv", "read_record", "load_setup", "REQUIRED", "OPTIONAL",
            "MIN_DURATION_S", "MIN_SAMPLES", "GAP_FACTOR", "MAX_RECORD_S", "record_columns"]
@@ -81,6 +81,13 @@ class Experiment:
         ``ramp_rate`` is its acceleration limit, and the model's reference is
         the S-curve, component ``ramp_scurve``; see
         :mod:`kilnctl.measure.reference`), or None for a straight ramp.
+    knots : tuple of (float, float) or None
+        Knots (t_k [s] from ``t0``, w_k [rpm]) of a recorded reference that is
+        not one ramp and hold (two rates, a second ramp, a ramp down): the
+        model's reference runs through them from rest and holds the last
+        (component ``ramp_knots<K>``, :func:`~kilnctl.measure.reference.fit_knots`);
+        ``ramp_rate`` is then the first segment's rate and ``omega_ref`` the
+        highest knot.  None otherwise.
     """
 
     t0: float
@@ -89,10 +96,15 @@ class Experiment:
     source: str
     notes: tuple = ()
     jerk: float | None = None
+    knots: tuple | None = None
 
     @property
     def ramp_end(self) -> float:
-        """Record time at which the speed reference reaches ``omega_ref`` [s] (``t0`` without a ramp)."""
+        """Record time at which the speed reference reaches ``omega_ref`` [s] (``t0`` without a ramp); with
+        knots, the first time it comes within 2 % of its highest value."""
+        if self.knots:
+            top = max(w for _, w in self.knots)
+            return self.t0 + next(t for t, w in self.knots if w >= 0.98 * top)
         if self.jerk is not None:
             from ..model.ramps import scurve_timing
 
@@ -109,7 +121,9 @@ class Experiment:
     def to_dict(self) -> dict:
         """Return the experiment as a JSON-ready dictionary."""
         return {"t0_s": self.t0, "ramp_rate_rpm_per_s": self.ramp_rate, "omega_ref_rpm": self.omega_ref,
-                "jerk_rpm_per_s2": self.jerk, "source": self.source, "notes": list(self.notes)}
+                "jerk_rpm_per_s2": self.jerk,
+                "knots": None if self.knots is None else [{"t_s": t, "rpm": w} for t, w in self.knots],
+                "source": self.source, "notes": list(self.notes)}
 
 
 @dataclass(frozen=True, eq=False)
@@ -320,16 +334,27 @@ class Measurement:
             notes = [f"recorded speed_ref_rpm is an S-curve with rounded corners (acceleration {rate:.4g} "
                      f"rpm/s, reached in {shape.rounding_s:.2f} s; fits the record to {shape.rms:.2g} rpm RMS "
                      f"where a straight ramp misses by {shape.rms_straight:.2g}): the model follows it"]
+        before = (scurve_values(self.t, start, rate, jerk, top) if jerk is not None
+                  else np.clip(rate * (self.t - start), 0.0, top) if math.isfinite(rate) else None)
+        path = fit_knots(self.t, ref, start, before) if before is not None else None
+        knots = None
+        if path is not None:
+            start, top, knots = path.t0, path.top, tuple(zip(path.times, path.values))
+            rate, jerk = path.values[0] / path.times[0], None
+            notes = [f"recorded speed_ref_rpm is not one ramp and hold: {path.describe()} (through "
+                     f"{len(knots)} knot(s), {path.rms:.2g} rpm RMS from the record, where a ramp and hold misses by "
+                     f"{path.rms_before:.3g}): the model follows it"]
         if t0 is not None:
             start = float(t0)
         start = max(start, float(self.t[0]))
-        for label, rec, setv, unit in (("peak ramp rate" if jerk else "ramp rate", rate, params.ramp_rate, "rpm/s"),
+        label = "first ramp rate" if knots else "peak ramp rate" if jerk else "ramp rate"
+        for label, rec, setv, unit in ((label, rate, params.ramp_rate, "rpm/s"),
                                        ("final speed reference", top, params.omega_ref, "rpm")):
             if abs(rec - setv) > 0.02 * abs(setv):
                 notes.append(f"recorded {label} {rec:.4g} {unit} differs from the setup's {setv:.4g} {unit}: "
                              "the recorded value is used")
         notes.append(f"start-up begins at t = {start:.3f} s (from the recorded speed reference)")
-        return Experiment(float(start), float(rate), float(top), "recorded speed_ref_rpm", tuple(notes), jerk)
+        return Experiment(float(start), float(rate), float(top), "recorded speed_ref_rpm", tuple(notes), jerk, knots)
 
     @staticmethod
     def require(measurement, where: str, name: str = "measurement") -> "Measurement":
@@ -1332,7 +1357,7 @@ def load_setup(path=None) -> Setup:
         else:
             flat[key] = value
     try:
-        params = Parameters(flat)
+        params = Parameters(fold_motors(flat, str(path)))
     except ParameterError as exc:
         raise ParameterError(f"{path}: {exc}") from None
     for k in options.get("calibrate", []):

@@ -721,6 +721,8 @@ def diagnosis_summary(d) -> str:
     str
     """
     lines = _wrap(f"diagnosis of {d.measurement_.source} ({d.wall_s_:.0f} s)", "")
+    for note in getattr(getattr(d, "experiment_", None), "notes", ()):
+        lines += _wrap(f"experiment: {note}", "  ")  # the reference the model follows, and where it starts
     lines += _wrap(f"baseline (calibrated {', '.join(d.calibrate)}): {format_fit(d.baseline_)}", "  ")
     if getattr(d, "oscillation_", None) is not None:
         lines += _wrap(oscillation_text(d.oscillation_), "  ")

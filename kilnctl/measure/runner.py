@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import KilnctlError, ModelError, name_list
+from ..model.ramps import knots_component
 from ..params import Parameters
 from ..simulate import DEFAULT_DT as _DT  # default simulation output step per model [s], defined there once
 from .io import Experiment, Measurement
@@ -102,7 +103,8 @@ def run_model(params: Parameters, measurement: Measurement, experiment: Experime
         The record.
     experiment : Experiment
         Start time [s], ramp rate [rpm/s] and final reference [rpm] (and the
-        jerk limit of an S-curve reference [rpm/s^2], see :class:`Experiment`).
+        jerk limit of an S-curve reference [rpm/s^2], or the knots of a reference that is not one ramp and
+        hold, see :class:`Experiment`).
     model : {'macro', 'micro'}, default 'macro'
         Base model.
     effects : sequence of str
@@ -139,7 +141,11 @@ def run_model(params: Parameters, measurement: Measurement, experiment: Experime
     effects, remove = name_list(effects, "effects", ModelError), name_list(remove, "remove", ModelError)
     initial = None
     jerk = getattr(experiment, "jerk", None)  # (an experiment built by hand may not have one)
-    if jerk is not None:  # a recorded S-curve reference: the model follows it
+    knots = getattr(experiment, "knots", None)
+    if knots:  # a recorded reference that is not one ramp and hold: the model follows it through its knots
+        effects = (knots_component(len(knots)),) + tuple(effects)
+        initial = {f"ramp_{x}{i}": v for i, kt in enumerate(knots, 1) for x, v in zip("tw", kt)}
+    elif jerk is not None:  # a recorded S-curve reference: the model follows it
         effects = ("ramp_scurve",) + tuple(effects)
         initial = {"ramp_a": experiment.ramp_rate, "ramp_j": jerk}
     resp = simulate(p, model, t_end=t_end, effects=tuple(effects), remove=tuple(remove), dt=min(dt, t_end / 4),

@@ -20,7 +20,8 @@ from .runner import kiln_angle
 from .stats import best_step, median_step, robust_sigma
 
 __all__ = ["residual_signature", "standstill_offsets", "window_mean_spread", "fit_points", "NARROWBAND_RATIO",
-           "EVENT_TIMING_S", "MATERIAL_FIT_POINTS", "SPEED_APART_S", "MIN_WINDOWS"]
+           "EVENT_TIMING_S", "MATERIAL_FIT_POINTS", "SPEED_APART_S", "MIN_WINDOWS", "spectral_line",
+           "LINE_RATIO", "LINE_PERIODS"]
 
 #: a residual spectral peak this many times its neighbours is an oscillation the model misses
 NARROWBAND_RATIO = 10.0
@@ -38,6 +39,17 @@ MATERIAL_FIT_POINTS = 0.2
 SPEED_APART_S = 1.0
 #: fewest spans of a residual whose means give the standard error of a mean (:func:`window_mean_spread`)
 MIN_WINDOWS = 8
+#: a spectral line: the residual's periodogram over the whole record at one frequency, this many times the median
+#: of the bins around it; coloured noise gives bins scattered as chi-square with two degrees of freedom about a
+#: smooth spectrum, whose largest of a thousand is about ten times their median, a sine through the record
+#: thousands of times
+LINE_RATIO = 50.0
+#: fewest periods of a line in the record [-]: fewer are a drift, which the step, the kiln angle and the
+#: speed describe
+LINE_PERIODS = 3.0
+#: largest deviation of a mains frequency from its nominal value that the aliased-ripple note considers [-]
+#: (interconnected grids hold 50 Hz within +-0.2 Hz in normal operation)
+MAINS_OFF = 0.002
 
 
 def standstill_offsets(m: Measurement, exp, *, min_samples: int = 10, residuals: dict | None = None) -> list[dict]:
@@ -184,6 +196,86 @@ def _timing_only(t, measured, model, where, limit: float) -> bool:
     return False
 
 
+def _alias_note(f_hz: float, fs: float) -> str:
+    """Where a converter's ripple would alias to at sampling rate ``fs`` [Hz], when that can be ``f_hz`` [Hz].
+
+    A six- or twelve-pulse bridge's ripple lies at 6 or 12 times the mains frequency (50 or 60 Hz); sampled at
+    fs without an anti-alias filter it appears at its distance from the nearest multiple of fs, so a mains
+    frequency a little off (within :data:`MAINS_OFF` of its nominal value) moves it by ``pulses`` times that
+    offset.  Returns the clause naming
+    the ripple and the mains offset it implies, or "".
+    """
+    for mains in (50.0, 60.0):
+        for pulses in (6, 12):
+            ripple = pulses * mains
+            k = round(ripple / fs)
+            for sign in (1, -1):
+                delta = (sign * f_hz + k * fs - ripple) / pulses
+                if abs(delta) <= MAINS_OFF * mains:
+                    return (f"; sampled at {fs:.4g} Hz, the {ripple:.0f} Hz ripple of a {pulses}-pulse bridge on "
+                            f"{mains:.0f} Hz mains lands at {f_hz:.3g} Hz when the mains runs {delta:+.3f} Hz off")
+    return ""
+
+
+def spectral_line(t, e) -> dict | None:
+    """The strongest sinusoid in a residual over the whole record, when it is a line and not coloured noise.
+
+    The periodogram of the residual (on a uniform grid at the median step, padded eightfold) is searched
+    between :data:`LINE_PERIODS` periods per record and the Nyquist frequency (Hann window: a slow drift's
+    leakage falls off fast), among the bins that are the largest within two record-length bins of
+    themselves (a peak of their own, not the skirt of a slower one); the largest is a line when it stands
+    :data:`LINE_RATIO` times above the median of the bins within 0.25 Hz of it (its own main lobe, +-3
+    record-length bins, left out).  Welch's averaged spectrum (the narrow-band ratio) cannot
+    resolve a line below a few tenths of a hertz; the whole record can: a converter's ripple aliased by a
+    logger that samples without an anti-alias filter (300 Hz of a six-pulse bridge at 50.05 Hz mains,
+    sampled at 50 Hz, is a 0.3 Hz sine), a periodic process load, a loop's limit cycle.
+
+    Parameters
+    ----------
+    t : array_like
+        Sample times [s].
+    e : array_like
+        Residual [unit], one value per sample.
+
+    Returns
+    -------
+    dict or None
+        ``hz`` [Hz], ``ratio`` (peak bin over its neighbours' median) and ``columns`` (sine and cosine at
+        ``hz`` at the times ``t``, for a regression); None without a line.
+    """
+    t = np.asarray(t, float)
+    e = np.asarray(e, float)
+    if t.size < 64:
+        return None
+    dt = median_step(t)
+    span = float(t[-1] - t[0])
+    grid = t[0] + dt * np.arange(int(np.floor(span / dt + 1e-9)) + 1)
+    eg = np.interp(grid, t, e)
+    eg = (eg - eg.mean()) * np.hanning(eg.size)  # a slow drift's leakage falls off fast instead of as 1/f
+    m = 8 * grid.size
+    p = np.abs(np.fft.rfft(eg, m)) ** 2
+    f = np.fft.rfftfreq(m, dt)
+    df_rec = 1.0 / span
+    # a peak of its own: the largest bin within two record-length bins, not the skirt of a slower peak
+    lobe = 16  # two record-length bins at eightfold padding
+    pad = np.pad(p, lobe, mode="constant")
+    own = np.ones(p.size, bool)
+    for s in range(1, lobe + 1):
+        own &= (p >= pad[lobe - s:lobe - s + p.size]) & (p >= pad[lobe + s:lobe + s + p.size])
+    ok = own & (f >= LINE_PERIODS * df_rec) & (f <= 0.5 / dt - 2 * df_rec)
+    if not ok.any():
+        return None
+    k = int(np.argmax(np.where(ok, p, -1.0)))
+    near = (np.abs(f - f[k]) <= 0.25) & (np.abs(f - f[k]) > 3 * df_rec)  # the Hann window's main lobe left out
+    if near.sum() < 8:
+        return None
+    ratio = float(p[k] / max(float(np.median(p[near])), 1e-300))
+    if ratio < LINE_RATIO:
+        return None
+    w = 2 * math.pi * float(f[k])
+    return {"hz": float(f[k]), "ratio": ratio, "columns": np.column_stack([np.sin(w * t), np.cos(w * t)])}
+
+
 def _shaft_orders(f_hz: float, df_hz: float, speed_rpm, t, n: float, steady_from: float | None) -> str:
     """The frequency ``f_hz`` as multiples of the motor's and the kiln's rotation at the record's steady speed
     (its median from ``steady_from`` on), for the hint: "" when the drive does not turn steadily there.
@@ -275,6 +367,11 @@ def residual_signature(comp: Comparison, n: float, steady_from: float | None = N
     }
     if ref is not None:
         regs["speed error"] = (ref - speed)[:, None]
+    line = spectral_line(t, e)
+    line_key = None
+    if line is not None:
+        line_key = f"a line at {line['hz']:.3g} Hz"
+        regs[line_key] = line["columns"]
     r2 = {}
     var = float(e @ e)
     for k, X in regs.items():
@@ -327,14 +424,24 @@ def residual_signature(comp: Comparison, n: float, steady_from: float | None = N
         "current": "something that depends on the current level (a limit, saturation, sensor scale)",
         "speed error": "a controller or speed-sensor difference (gains, filter, lag)",
     }
+    if line_key is not None:
+        hints[line_key] = (f"a sinusoid at {line['hz']:.3g} Hz through the record ({line['ratio']:.0f} x the "
+                           "spectrum around it): a periodic load or oscillation the model lacks, or a converter's "
+                           "ripple aliased by the logger's sampling"
+                           + _alias_note(line["hz"], 1.0 / dt))
     if step_key is not None:
         hints[step_key] = (f"a change outside the catalogue: a step of {step['size']:+.0f} A in the current at "
                            f"t = {step['t']:.1f} s while the drive runs at its set speed (a load step, a process "
                            "upset, a sensor fault)")
-    if peaked and not correlated:
+    df_welch = float(spec["f"][1] - spec["f"][0])
+    # the line Welch's spectrum already shows as a peak is that oscillation: named with the shafts' orders
+    same_line = (line_key is not None and strongest == line_key
+                 and abs(line["hz"] - spec["narrowband_hz"]) <= 2 * df_welch)
+    if peaked and (not correlated or same_line):
         hint = (f"an oscillation near {spec['narrowband_hz']:.2f} Hz: a resonance (torsional mode, burden "
                 f"pendulum near 0.34 Hz) or a loop that is less damped than modelled"
-                + _shaft_orders(spec["narrowband_hz"], float(spec["f"][1] - spec["f"][0]), speed, t, n, steady_from))
+                + _shaft_orders(spec["narrowband_hz"], df_welch, speed, t, n, steady_from)
+                + (_alias_note(line["hz"], 1.0 / dt) if same_line else ""))
     elif correlated:
         hint = hints[strongest]
     elif apart is not None:

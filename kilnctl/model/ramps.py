@@ -23,6 +23,10 @@ Profiles
     The same with each corner rounded over ``ramp_corner`` [s] (softplus,
     see :func:`pwl_reference`): a smooth function of time and rates, for
     gradient-based optimization.
+``ramp_knots<K>``
+    Through K knots (t_k, w_k) from rest at t = 0, held at w_K after the
+    last: a logged reference that is not one ramp and hold (two rates, a
+    hold and a second ramp, a ramp down), :func:`knots_reference`.
 ``ramp_scurve``
     Jerk-limited S-curve: the reference acceleration rises at ``ramp_j``
     [rpm/s^2] to ``ramp_a`` [rpm/s], holds, and falls back to zero exactly
@@ -51,8 +55,8 @@ import casadi as ca
 from ..errors import ModelError
 from .base import REGISTRY, Component, register
 
-__all__ = ["pwl_reference", "scurve_reference", "pwl_component", "smooth_ramp", "softplus",
-           "RATE_SCALE", "JERK_SCALE", "CORNER_DEFAULT", "scurve_timing"]
+__all__ = ["pwl_reference", "scurve_reference", "knots_reference", "knots_component", "pwl_component", "smooth_ramp", "softplus",
+           "RATE_SCALE", "JERK_SCALE", "MAX_KNOTS", "CORNER_DEFAULT", "scurve_timing"]
 
 #: nominal magnitude of a ramp rate [rpm/s] (state scaling)
 RATE_SCALE = 100.0
@@ -154,6 +158,49 @@ def pwl_reference(t, rates, omega_ref, corner=None):
         e_v = e_v + jump * smooth_ramp(t - t_k, corner)
         ev_dot = ev_dot + jump * _step(t - t_k, corner)
     return e_v, ev_dot, t_k
+
+
+def knots_reference(t, times, values):
+    """Piecewise-linear speed reference through knots, from rest at t = 0.
+
+    The reference rises from 0 at t = 0 to ``values[0]`` at ``times[0]``,
+    then runs straight from knot to knot and holds ``values[-1]`` after the
+    last.  Written as a sum of ramp functions,
+    e_v(t) = s_1 t + sum_k (s_{k+1} - s_k) max(t - t_k, 0), with the
+    segment slopes s_k = (w_k - w_{k-1})/(t_k - t_{k-1}) (t_0 = w_0 = 0)
+    and s_{K+1} = 0.  Slopes may be negative (a ramp down) or zero (a hold).
+
+    Parameters
+    ----------
+    t : casadi.SX or float
+        Time since the start-up began [s], t >= 0.
+    times : sequence of casadi.SX or float
+        Knot times t_1 < ... < t_K [s], > 0.
+    values : sequence of casadi.SX or float
+        Reference at the knots w_1..w_K [rpm].
+
+    Returns
+    -------
+    e_v : casadi.SX
+        Speed reference [rpm].
+    ev_dot : casadi.SX
+        Its time derivative [rpm/s] (a step at each knot).
+    """
+    if len(times) < 1 or len(times) != len(values):
+        raise ModelError("a reference through knots needs as many knot times as values, at least one")
+    slopes = []
+    t_prev, w_prev = 0, 0
+    for t_k, w_k in zip(times, values):
+        slopes.append((w_k - w_prev) / (t_k - t_prev))
+        t_prev, w_prev = t_k, w_k
+    slopes.append(0.0)
+    e_v = slopes[0] * t
+    ev_dot = slopes[0] + 0 * t
+    for k, t_k in enumerate(times):
+        jump = slopes[k + 1] - slopes[k]
+        e_v = e_v + jump * ca.fmax(t - t_k, 0)
+        ev_dot = ev_dot + jump * _step(t - t_k)
+    return e_v, ev_dot
 
 
 def scurve_timing(a, j, omega_ref):
@@ -309,6 +356,61 @@ def pwl_component(n: int, smooth: bool = False) -> str:
     return name
 
 
+def _knots_class(k: int) -> type[Component]:
+    states = tuple((f"ramp_t{i}", "s", 10.0, f"time of knot {i} of {k} of the reference, from the start-up")
+                   for i in range(1, k + 1)) + tuple(
+        (f"ramp_w{i}", "rpm", RATE_SCALE, f"reference at knot {i} of {k}") for i in range(1, k + 1))
+
+    class KnotsRamp(_ProfileRamp):
+        __doc__ = (f"Speed reference through {k} knot(s) (t_i, w_i) from rest, held after the last.\n\n"
+                   "States ramp_t1..ramp_tK [s] and ramp_w1..ramp_wK [rpm] are the knots (constant); see\n"
+                   ":func:`kilnctl.model.ramps.knots_reference`.  Default: the paper's ramp (one knot at\n"
+                   "omega_ref/ramp_rate, the others spaced 1 s after it on the same value).")
+        profile_states = states
+
+        def initial_state(self, params):
+            t_top = params.omega_ref / params.ramp_rate
+            x0 = {f"ramp_t{i}": t_top + (i - 1) for i in range(1, k + 1)}
+            x0.update({f"ramp_w{i}": params.omega_ref for i in range(1, k + 1)})
+            return x0
+
+        def reference(self, e):
+            return knots_reference(e.t, [e.x[f"ramp_t{i}"] for i in range(1, k + 1)],
+                                   [e.x[f"ramp_w{i}"] for i in range(1, k + 1)])
+
+    KnotsRamp.name = f"ramp_knots{k}"
+    KnotsRamp.summary = f"speed reference through {k} knot(s) (a logged reference that is not one ramp)"
+    KnotsRamp.param_names = ("omega_ref", "ramp_rate")
+    KnotsRamp.__name__ = KnotsRamp.__qualname__ = f"KnotsRamp{k}"
+    return KnotsRamp
+
+
+def knots_component(k: int) -> str:
+    """Return the registry name of the reference through ``k`` knots, registering it once.
+
+    Parameters
+    ----------
+    k : int
+        Number of knots, >= 1.
+
+    Returns
+    -------
+    str
+        ``ramp_knots<k>``.
+
+    Raises
+    ------
+    ModelError
+        ``k`` is not a positive integer.
+    """
+    if isinstance(k, bool) or not isinstance(k, int) or k < 1:
+        raise ModelError(f"number of reference knots k = {k!r} must be a positive integer")
+    name = f"ramp_knots{k}"
+    if name not in REGISTRY:
+        register(_knots_class(k))
+    return name
+
+
 @register
 class ScurveRamp(_ProfileRamp):
     """Jerk-limited S-curve speed reference (see :func:`scurve_reference`).
@@ -335,3 +437,8 @@ class ScurveRamp(_ProfileRamp):
 for _n in (1, 2, 3, 4):
     pwl_component(_n)
     pwl_component(_n, smooth=True)
+#: most knots of a logged reference the model follows (:func:`kilnctl.measure.reference.fit_knots`); all
+#: registered here, so that a record's reference does not change the registry (and the plant cache) mid-run
+MAX_KNOTS = 8
+for _n in range(1, MAX_KNOTS + 1):
+    knots_component(_n)
