@@ -913,6 +913,21 @@ def test_the_caution_on_base_values_far_from_the_setup_reads_for_two_values():
                                                     "J_v": SETUP.J_v})
     (text,) = drift_texts(d, SETUP)
     assert "mu_c = 0.24 and m_v = 8.64e+05 kg lie 40 % below and 49 % above the setup's (0.4, 5.8e+05 kg)" in text
+    assert "motors" not in text
+
+
+def test_a_burden_at_half_the_setups_points_to_a_drive_of_two_motors():
+    # truth: red team 10's dual drive (two powered motors, one motor's current logged, one motor's nameplate in
+    # the setup): its burden calibrated to m_v 49 % and J_v 48 % below the setup's, as the fold predicts (1/2)
+    d = Diagnosis(SETUP)
+    d.final_calibration_ = SimpleNamespace(values_={"mu_c": SETUP.mu_c, "m_v": SETUP.m_v * 0.51,
+                                                    "J_v": SETUP.J_v * 0.52})
+    (text,) = drift_texts(d, SETUP)
+    assert "near 1/2 of the setup's" in text and "motors = 2 in [motor]" in text
+    d.final_calibration_ = SimpleNamespace(values_={"mu_c": SETUP.mu_c, "m_v": SETUP.m_v * 0.51,
+                                                    "J_v": SETUP.J_v})  # the burden's mass alone: another story
+    (text,) = drift_texts(d, SETUP)
+    assert "motors" not in text
 
 
 def test_several_rivals_by_the_whitened_bic_share_one_caution():

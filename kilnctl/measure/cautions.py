@@ -236,7 +236,26 @@ def drift_texts(d, params) -> list[str]:
     verb = "lies" if len(far) == 1 else "lie"
     return [f"The final model's {values} {verb} {devs} the setup's ({given}). If the setup is right, the "
             f"calibration has made up for a difference the model lacks, which this diagnosis cannot name; if "
-            f"it is not, correct the setup."]
+            f"it is not, correct the setup." + _motors_hint(far, params)]
+
+
+def _motors_hint(far, params) -> str:
+    """The drive of several motors that the burden's calibrated m_v and J_v point to, or "".
+
+    With one motor's nameplate in the setup and N motors driving the kiln (one motor's current logged), the
+    model's torque per logged ampere is 1/N of the drive's, and the calibration makes the burden's mass and
+    inertia about 1/N of the setup's (red team 10's dual drive: 49 % and 48 % below).  Named when both lie
+    within 15 % of 1/N for N = 2 to 4 and the setup does not already fold motors.
+    """
+    ratio = {k: v / s0 for k, v, s0 in far}
+    if not {"m_v", "J_v"} <= set(ratio):
+        return ""
+    for n in (2, 3, 4):
+        if all(abs(ratio[k] * n - 1.0) <= 0.15 for k in ("m_v", "J_v")):
+            return (f" Both are near 1/{n} of the setup's: a kiln driven by {n} motors with one motor's current "
+                    f"logged and one motor's nameplate in the setup gives exactly this (then write motors = {n} "
+                    "in [motor]: kilnctl multiplies k_i, J_m and B_m by it).")
+    return ""
 
 
 #: how every rival caution ends: what would tell the effects apart
