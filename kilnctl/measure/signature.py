@@ -47,6 +47,10 @@ LINE_RATIO = 50.0
 #: fewest periods of a line in the record [-]: fewer are a drift, which the step, the kiln angle and the
 #: speed describe
 LINE_PERIODS = 3.0
+#: a final model whose speed fit is below this [%] misses the start-up itself: a speed-controlled drive follows
+#: its reference within a few rpm, and every final model of the benchmark's 79 records fits the speed to 99.5 %
+#: or more (red team 10: a reference the model did not follow left a speed fit of -7.7 % that nothing flagged)
+SPEED_FIT_MIN = 90.0
 #: largest deviation of a mains frequency from its nominal value that the aliased-ripple note considers [-]
 #: (interconnected grids hold 50 Hz within +-0.2 Hz in normal operation)
 MAINS_OFF = 0.002
@@ -415,7 +419,9 @@ def residual_signature(comp: Comparison, n: float, steady_from: float | None = N
     y = ch.measured
     explained = _points_gained(var, var * (1.0 - r2[strongest]), float(np.linalg.norm(y - y.mean())))
     correlated = r2[strongest] > 0.25 and explained >= MATERIAL_FIT_POINTS
-    structured = bool(correlated or peaked or fails)
+    speed_fit = comp.fit.get("speed_rpm", 100.0)
+    lost = math.isfinite(speed_fit) and speed_fit < SPEED_FIT_MIN
+    structured = bool(correlated or peaked or fails or lost)
     hints = {
         "kiln angle (once per revolution)": "a torque that repeats with each kiln revolution (unbalance, shell "
                                             "crank, girth-gear run-out)",
@@ -437,7 +443,12 @@ def residual_signature(comp: Comparison, n: float, steady_from: float | None = N
     # the line Welch's spectrum already shows as a peak is that oscillation: named with the shafts' orders
     same_line = (line_key is not None and strongest == line_key
                  and abs(line["hz"] - spec["narrowband_hz"]) <= 2 * df_welch)
-    if peaked and (not correlated or same_line):
+    if lost:
+        # the regressors of the current describe what a model that runs the start-up misses; this one does not
+        hint = (f"the model does not run the recorded start-up: its speed fits the record to {speed_fit:.1f} % "
+                "(a speed-controlled drive follows its reference within a few rpm): check the speed reference "
+                "the model follows (the experiment's notes), the speed's unit and column, the gains and the setup")
+    elif peaked and (not correlated or same_line):
         hint = (f"an oscillation near {spec['narrowband_hz']:.2f} Hz: a resonance (torsional mode, burden "
                 f"pendulum near 0.34 Hz) or a loop that is less damped than modelled"
                 + _shaft_orders(spec["narrowband_hz"], df_welch, speed, t, n, steady_from)

@@ -1,4 +1,5 @@
-"""A sinusoid through the record in the residual: found as a line, told from coloured noise, and named.
+"""What the final residual's signature adds for records unlike the benchmark's: a sinusoid through the record
+(found as a line, told from coloured noise, and named) and a model that does not run the start-up at all.
 
 Truths: a synthetic sine of known frequency in white plus AR(1) noise (the line is found at its frequency, to
 the record's resolution); noise alone of the same kinds, down to a noise correlated over two seconds, in
@@ -57,3 +58,25 @@ def test_the_aliased_ripple_is_named_with_its_mains_offset():
     # 360 Hz (6 x 60 Hz) sampled at 100 Hz lands at 400 - 360 = 40 Hz: a 39.7 Hz line is 360.3 Hz, 60.05 Hz mains
     assert "on 60 Hz mains" in _alias_note(39.7, 100.0) and "+0.050 Hz off" in _alias_note(39.7, 100.0)
     assert _alias_note(7.3, 50.0) == ""  # no mains within 0.5 % puts a ripple there
+
+
+def test_a_model_that_does_not_run_the_start_up_is_structure():
+    """Truth by construction: the generator's record with its speed halved and no reference logged (a speed in
+    another unit, a reference the model does not follow): the model runs the setup's start-up to 500 rpm, the
+    record to 250; the speed fit is far below zero and the signature says the model does not run the record,
+    whatever the current's regressors explain (red team 10: a speed fit of -7.7 % that nothing flagged)."""
+    from kilnctl import Parameters
+    from kilnctl.measure import Measurement, compare
+    from kilnctl.measure.signature import SPEED_FIT_MIN, residual_signature
+    from kilnctl.measure.synthetic import DEFAULT_GAINS, make_record
+
+    setup = Parameters(DEFAULT_GAINS)
+    m0, truth = make_record((), seed=3, t_end=20.0)
+    m = Measurement.from_arrays(m0.t, m0.current, 0.5 * m0.speed, source="halved", params=setup)
+    c = compare(m, setup.replace(**truth["plant"]))
+    assert c.fit["speed_rpm"] < SPEED_FIT_MIN
+    sig = residual_signature(c, setup.n)
+    assert sig["structured"] and sig["hint"].startswith("the model does not run the recorded start-up")
+    # the record itself passes
+    assert not residual_signature(compare(m0, setup.replace(**truth["plant"])), setup.n)["hint"].startswith(
+        "the model does not run")
