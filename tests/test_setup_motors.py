@@ -61,3 +61,14 @@ def test_a_bad_number_of_motors_is_refused_by_name(tmp_path, bad):
         load_setup(_setup(tmp_path / "bad.toml", kiln_B(), motors=bad))
     with pytest.raises(ConfigFileError, match=r"\[motor\] motors"):
         Parameters.from_toml(tmp_path / "bad.toml")
+
+
+def test_params_says_what_the_fold_did(tmp_path, capsys):
+    from kilnctl.cli import main
+
+    path = _setup(tmp_path / "two.toml", kiln_B(), motors=2)
+    assert main(["params", "--config", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "motors = 2 in [motor]: k_i, J_m, B_m above are 2 times one motor's" in out
+    assert main(["params", "--config", str(_setup(tmp_path / "one.toml", kiln_B()))]) == 0
+    assert "motors =" not in capsys.readouterr().out

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from ..files import read_toml
+from ..params import FOLDED_BY_MOTORS, MOTORS_KEY
 from . import print_json
 from .common import Command, add_config_arg, add_options, load_params
 
@@ -36,7 +38,21 @@ class ParamsCommand(Command):
             print(f"{mark} {r['name']:<15} {value:>12}  {r['unit']:<12} {r['description']}")
             print(f"  {'':<15} {'':>12}  source: {r['source']}")
         print("\n(* = changed from the default)")
+        motors = _motors(args)
+        if motors:
+            print(f"(motors = {motors} in [motor]: {', '.join(FOLDED_BY_MOTORS)} above are {motors} times one motor's; "
+                  "the armature circuit and I_max are one motor's)")
         return 0
+
+
+def _motors(args) -> int | None:
+    """The ``motors`` of the --config file's [motor] section (already folded into the parameters), or None."""
+    config = getattr(args, "config", None)
+    if not config:
+        return None
+    motor = read_toml(config, "configuration file").get("motor", {})
+    n = motor.get(MOTORS_KEY) if isinstance(motor, dict) else None
+    return n if isinstance(n, int) and not isinstance(n, bool) and n > 1 else None
 
 
 register = ParamsCommand.register
