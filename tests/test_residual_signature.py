@@ -80,3 +80,32 @@ def test_a_model_that_does_not_run_the_start_up_is_structure():
     # the record itself passes
     assert not residual_signature(compare(m0, setup.replace(**truth["plant"])), setup.n)["hint"].startswith(
         "the model does not run")
+
+
+def test_a_kiln_turning_before_the_start_up_is_named():
+    """Truth by construction: the generator's record (at rest for 1 s before its ramp) with a barring drive's
+    10 rpm (2 % of the set speed) on the speed before the start, as red team 11's record, where a motor friction
+    of 376 N m had made up for it unnamed; the record at rest says nothing of it."""
+    from kilnctl import Parameters
+    from kilnctl.measure import Measurement
+    from kilnctl.measure.signature import standstill_offsets
+    from kilnctl.measure.synthetic import DEFAULT_GAINS, make_record
+
+    setup = Parameters(DEFAULT_GAINS)
+    m0, _ = make_record((), seed=3, t_end=12.0)
+    rng = np.random.default_rng(3)
+    pre = np.arange(-50, 0) * 0.02  # a second before the ramp, as a logger's pre-trigger
+    t = np.concatenate([pre, m0.t]) + 1.0
+    current = np.concatenate([rng.normal(0.0, 4.0, pre.size), m0.current])
+    ref = np.concatenate([np.zeros(pre.size), m0.speed_ref])
+    records = {}
+    for name, barring in (("rest", 0.0), ("barring", 10.0)):
+        speed = np.concatenate([barring + rng.normal(0.0, 0.3, pre.size), m0.speed])
+        records[name] = Measurement.from_arrays(t, current, speed, ref, source=name, params=setup)
+    exp = records["rest"].experiment(setup)
+    assert exp.t0 == pytest.approx(1.0, abs=0.02)
+    (turning, *_) = standstill_offsets(records["barring"], exp)
+    assert turning["channel"] == "speed_rpm" and turning["offset"] == pytest.approx(10.0, abs=0.5)
+    assert turning["text"].startswith("the kiln turns before the start-up: the speed reads +10") and "2.0 %" in \
+        turning["text"]
+    assert not [o for o in standstill_offsets(records["rest"], exp) if o["text"].startswith("the kiln turns")]

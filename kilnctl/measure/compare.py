@@ -392,9 +392,13 @@ def _describe(t, y, yhat, e, a, b, unit, phases) -> dict:
     # the largest miss may lie on the other side of the mean (a dip within an interval the model overshoots):
     # then it is named with its own side ("high by 4 A on average, by 300 A at 2.32 s (measured 358 A, model
     # 58 A)" read as the model 300 A too high)
-    text = (f"{ta:.1f}-{tb:.1f} s ({phase}): model {side} by {abs(mean):{fmt}} {unit} on average, "
+    def by(v):  # a miss: two significant digits where the value's format would round it to 0 ("by 0 A")
+        v = abs(float(v))
+        return f"{v:{fmt}}" if v >= (0.5 if unit == "A" else 0.05) else f"{v:.2g}"
+
+    text = (f"{ta:.1f}-{tb:.1f} s ({phase}): model {side} by {by(mean)} {unit} on average, "
             + ("" if worst == side else f"but {worst} ")
-            + f"by {abs(float(e[kw])):{fmt}} {unit} at {float(t[kw]):.2f} s (measured {float(y[kw]):{fmt}} "
+            + f"by {by(e[kw])} {unit} at {float(t[kw]):.2f} s (measured {float(y[kw]):{fmt}} "
             f"{unit}, model {float(yhat[kw]):{fmt}} {unit})")
     return {"t_start": ta, "t_end": tb, "phase": phase, "measured_peak": mp, "model_peak": hp,
             "mean_residual": mean, "t_worst": float(t[kw]), "measured_worst": float(y[kw]),

@@ -628,12 +628,26 @@ def _interpret(table, params, columns, *, log=False) -> Measurement:
         seen.add(nm)
     parsed = [split_unit(nm) for nm in names]
     found: dict[str, tuple[int, str | None]] = {}
+
+    def named(base):  # the columns called ``base``, with or without a unit
+        return [j for j, nm in enumerate(names) if nm == base] or [j for j, (b, _) in enumerate(parsed) if b == base]
+
+    # a record kilnctl wrote (split-startups' pieces) read with the setup that maps the plant's log: every
+    # required channel mapped to a column the file lacks, and the file has kilnctl's own names for them
+    own_format = all(ch in columns and not named(split_unit(columns[ch])[0]) and named(ch) for ch in REQUIRED)
+    fallback: list[str] = []  # mapped columns the file lacks, read under kilnctl's own names
     for ch in list(REQUIRED) + list(OPTIONAL):
         if ch in columns:
             want = columns[ch]
             wbase, wunit = split_unit(want)
             hits = [j for j, nm in enumerate(names) if nm == want] or \
                    [j for j, (b, _) in enumerate(parsed) if b == wbase]
+            own = named(ch)
+            if not hits and own and own_format:
+                # kilnctl's own column, in kilnctl's unit unless its header says otherwise
+                fallback.append(f"{ch}={want}")
+                found[ch] = (own[0], parsed[own[0]][1])
+                continue
             if not hits:
                 raise DataError(f"{src}: the column mapping gives {ch}={want}, but the file has no column "
                                 f"{wbase!r}; it has {', '.join(names)}; {close_matches_hint(wbase, names)}")
@@ -654,6 +668,10 @@ def _interpret(table, params, columns, *, log=False) -> Measurement:
             elif ch in REQUIRED:
                 raise DataError(f"{head}: missing column {ch!r} [{REQUIRED[ch]}]; "
                                 f"the header has {', '.join(names)}; {_mapping_hint(ch, parsed, columns, found, table)}")
+    if fallback:
+        notes.append(f"the column mapping's {', '.join(fallback)} {'is' if len(fallback) == 1 else 'are'} not in "
+                     "this file; it has kilnctl's own column names (a record written by kilnctl split-startups?), "
+                     "which are read instead")
     by_col: dict[int, str] = {}
     for ch, (j, _) in found.items():
         if j in by_col:
@@ -1212,7 +1230,9 @@ def _check_units(arrays, lines, source, params, row_word, labels=None, log=False
             raise DataError(
                 f"{at}: largest value {top:.4g} looks like rad/s, not rpm (the setup's speed reference {w_ref:g} rpm "
                 f"is {rad:.4g} rad/s); multiply by 60/(2*pi) = 9.549, or write the unit in the header "
-                f"('{name} [rad/s]'){pct}")
+                f"('{_column_base(labels, name)} [rad/s]')"
+                + (f" or the mapping (--columns '{name}={_column_base(labels, name)} [rad/s]')"
+                   if _column_base(labels, name) != name else "") + pct)
         if not log and top > TOO_LARGE * w_ref > 0:
             glitch = _glitches(a, TOO_LARGE * w_ref, source, lines, row_word, labels, name, "rpm")
             if glitch:
@@ -1244,12 +1264,13 @@ def _check_units(arrays, lines, source, params, row_word, labels=None, log=False
             f"{_where(source, lines, k, 'current_A', row_word, labels)}: largest value {top:.4g} is "
             f"{top / params.I_max:.0f} x the setup's current limit I_max = {params.I_max:g} A: looks like mA or a "
             "drive's internal units (16384 = 100 %?), not A; give the current in A, or write the unit in the header "
-            "('current_A [mA]'); if the setup's I_max is wrong, correct it in the setup file (--config)")
+            f"('{_column_base(labels, 'current_A')} [mA]'); if the setup's I_max is wrong, correct it in the setup "
+            "file (--config)")
     if 0 < top < 0.01 * params.I_max:
         raise DataError(
             f"{_where(source, lines, k, 'current_A', row_word, labels)}: largest value {top:.4g} looks like kA or a "
             f"per-unit value, not A (the setup's current limit is {params.I_max:g} A); give the current in A, or "
-            "write the unit in the header ('current_A [kA]')")
+            f"write the unit in the header ('{_column_base(labels, 'current_A')} [kA]')")
 
 
 # --- setup file -------------------------------------------------------------------

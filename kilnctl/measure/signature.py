@@ -69,7 +69,9 @@ def standstill_offsets(m: Measurement, exp, *, min_samples: int = 10, residuals:
     rest cannot show noise correlated over a good part of a second (red team 6: AR(1) noise of tau = 0.4 s read
     as offsets of +8 and +4.5 A, 2 standard errors of its 1 s mean, judged as 10): given the model's
     ``residuals``, the standard error is at least the spread of the means of as many consecutive residual samples
-    elsewhere in the record (what noise, and what the model misses, make of such a mean).
+    elsewhere in the record (what noise, and what the model misses, make of such a mean).  When most samples
+    before the start show a speed of 1 % of the set speed or more, the kiln was turning (an inching or barring
+    drive, a late trigger): that is reported first, as an offset of the speed.
 
     Parameters
     ----------
@@ -89,11 +91,15 @@ def standstill_offsets(m: Measurement, exp, *, min_samples: int = 10, residuals:
     list of dict
         Per offset channel: ``channel``, ``offset`` [A or rpm], ``n_samples``, ``text``.
     """
-    rest = (m.t < exp.t0 - 0.05) & (np.abs(m.speed) < 0.01 * max(abs(exp.omega_ref), 1e-9))
+    before = m.t < exp.t0 - 0.05
+    out = []
+    turning = _turning_before(m, exp, before, min_samples)
+    if turning is not None:
+        out.append(turning)
+    rest = before & (np.abs(m.speed) < 0.01 * max(abs(exp.omega_ref), 1e-9))
     n = int(rest.sum())
     if n < min_samples:
-        return []
-    out = []
+        return out
     for c, unit, what in (("current_A", "A", "current"), ("speed_rpm", "rpm", "speed")):
         x = m.channels[c][rest]
         med = float(np.median(x))
@@ -108,6 +114,27 @@ def standstill_offsets(m: Measurement, exp, *, min_samples: int = 10, residuals:
                                  f"noise {sig:.2g} {unit}) where the model has zero: a sensor offset, or a {what} "
                                  "at rest that no catalogued effect makes")})
     return out
+
+
+def _turning_before(m: Measurement, exp, before, min_samples: int) -> dict | None:
+    """The kiln turning before the start-up, when most of the samples before it show a speed of 1 % of the set
+    speed or more (an inching or barring drive, or a record that begins after the start): the model starts
+    from rest there, so its first seconds cannot match, and a constant-torque effect may make up for it (red
+    team 11: a barring drive at 2 % of the speed was taken for 376 N m of motor friction); None otherwise."""
+    n = int(before.sum())
+    if n < min_samples:
+        return None
+    w = m.speed[before]
+    level = 0.01 * max(abs(exp.omega_ref), 1e-9)
+    if np.mean(np.abs(w) >= level) < 0.5:
+        return None
+    med = float(np.median(w))
+    share = 100 * abs(med) / max(abs(exp.omega_ref), 1e-9)
+    return {"channel": "speed_rpm", "offset": med, "n_samples": n,
+            "text": (f"the kiln turns before the start-up: the speed reads {med:+.3g} rpm ({share:.1f} % of the "
+                     f"set speed) over the {n} samples before "
+                     f"t = {exp.t0:.2f} s, where the model starts at rest (an inching or barring drive turning it, "
+                     "or a record that begins after the start)")}
 
 
 def window_mean_spread(e, n: int) -> float:
