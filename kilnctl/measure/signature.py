@@ -471,8 +471,11 @@ def residual_signature(comp: Comparison, n: float, steady_from: float | None = N
     }
     if line_key is not None:
         hints[line_key] = (f"a sinusoid at {line['hz']:.3g} Hz through the record ({line['ratio']:.0f} x the "
-                           "spectrum around it): a periodic load or oscillation the model lacks, or a converter's "
-                           "ripple aliased by the logger's sampling"
+                           "spectrum around it): a periodic load or oscillation the model lacks"
+                           + (", or one it has at another frequency or phase (the burden's sliding oscillation, "
+                              "near 0.34 Hz with Table 1, whose frequency the burden's J_v and L set)"
+                              if line["hz"] < 1.0 else "")
+                           + ", or a converter's ripple aliased by the logger's sampling"
                            + _alias_note(line["hz"], 1.0 / dt))
     if step_key is not None:
         hints[step_key] = (f"a change outside the catalogue: a step of {step['size']:+.0f} A in the current at "
