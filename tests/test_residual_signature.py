@@ -105,7 +105,7 @@ def test_a_kiln_turning_before_the_start_up_is_named():
     exp = records["rest"].experiment(setup)
     assert exp.t0 == pytest.approx(1.0, abs=0.02)
     (turning, *_) = standstill_offsets(records["barring"], exp)
-    assert turning["channel"] == "speed_rpm" and turning["offset"] == pytest.approx(10.0, abs=0.5)
+    assert turning["turning"] and turning["channel"] == "speed_rpm" and turning["offset"] == pytest.approx(10.0, abs=0.5)
     assert turning["text"].startswith("the kiln turns before the start-up: the speed reads +10") and "2.0 %" in \
         turning["text"]
     assert not [o for o in standstill_offsets(records["rest"], exp) if o["text"].startswith("the kiln turns")]

@@ -616,6 +616,9 @@ class Diagnosis:
             else:
                 self.unexplained_ = dict(self.unexplained_, text=f"{text}. {self.unexplained_['text']}",
                                          sources=["standstill"] + self.unexplained_["sources"])
+                turning = [o["text"] for o in self.standstill_ if o["channel"] == "speed_rpm" and o.get("turning")]
+                if turning:  # a model started at rest under a turning kiln: what else it misses follows from that
+                    self.unexplained_["hint"] = f"{turning[0]}; then {self.unexplained_['hint']}"
         self.measurement_ = m
         self.wall_s_ = time.perf_counter() - wall0
         say(f"final: {_fmt_fit(self.final_)} with {', '.join(selected) or 'no effect added'} "

@@ -96,7 +96,8 @@ def standstill_offsets(m: Measurement, exp, *, min_samples: int = 10, residuals:
     Returns
     -------
     list of dict
-        Per offset channel: ``channel``, ``offset`` [A or rpm], ``n_samples``, ``text``.
+        Per offset channel: ``channel``, ``offset`` [A or rpm], ``n_samples``, ``text`` (and ``turning`` True for
+        a kiln turning before the start).
     """
     before = m.t < exp.t0 - 0.05
     out = []
@@ -137,7 +138,7 @@ def _turning_before(m: Measurement, exp, before, min_samples: int) -> dict | Non
         return None
     med = float(np.median(w))
     share = 100 * abs(med) / max(abs(exp.omega_ref), 1e-9)
-    return {"channel": "speed_rpm", "offset": med, "n_samples": n,
+    return {"channel": "speed_rpm", "offset": med, "n_samples": n, "turning": True,
             "text": (f"the kiln turns before the start-up: the speed reads {med:+.3g} rpm ({share:.1f} % of the "
                      f"set speed) over the {n} samples before "
                      f"t = {exp.t0:.2f} s, where the model starts at rest (an inching or barring drive turning it, "
