@@ -241,8 +241,7 @@ def _alias_note(f_hz: float, fs: float) -> str:
     A six- or twelve-pulse bridge's ripple lies at 6 or 12 times the mains frequency (50 or 60 Hz); sampled at
     fs without an anti-alias filter it appears at its distance from the nearest multiple of fs, so a mains
     frequency a little off (within :data:`MAINS_OFF` of its nominal value) moves it by ``pulses`` times that
-    offset.  Returns the clause naming
-    the ripple and the mains offset it implies, or "".
+    offset.  Returns the clause naming the ripple and the mains offset it implies, or "".
     """
     for mains in (50.0, 60.0):
         for pulses in (6, 12):
@@ -366,7 +365,12 @@ def residual_signature(comp: Comparison, n: float, steady_from: float | None = N
     anywhere unless a shift of the model's signal by EVENT_TIMING_S removes
     it (an event the model has, a little off in time).  A correlation or a
     failing interval counts only when it costs the channel at least
-    MATERIAL_FIT_POINTS of fit % (:func:`fit_points`).
+    MATERIAL_FIT_POINTS of fit % (:func:`fit_points`).  A sinusoid through
+    the record (:func:`spectral_line`) is a further regressor.  The speed
+    is read too: a speed fit below SPEED_FIT_MIN (the model does not run
+    the recorded start-up), or below SPEED_FIT_STRUCTURE with a residual
+    more than SPEED_EXCESS times its sample-to-sample noise (the speed
+    loop follows otherwise than modelled), is structure as well.
 
     Parameters
     ----------
