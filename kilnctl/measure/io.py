@@ -341,9 +341,10 @@ class Measurement:
         if path is not None:
             start, top, knots = path.t0, path.top, tuple(zip(path.times, path.values))
             rate, jerk = path.values[0] / path.times[0], None
+            fits = "exactly" if path.rms < 0.01 else f"to {path.rms:.2g} rpm RMS"
             notes = [f"recorded speed_ref_rpm is not one ramp and hold: {path.describe()} (through "
-                     f"{len(knots)} knot(s), {path.rms:.2g} rpm RMS from the record, where a ramp and hold misses by "
-                     f"{path.rms_before:.3g}): the model follows it"]
+                     f"{len(knots)} knot(s), which fit it {fits}, where a ramp and hold misses by "
+                     f"{path.rms_before:.3g} rpm): the model follows it"]
         if t0 is not None:
             start = float(t0)
         start = max(start, float(self.t[0]))
