@@ -131,3 +131,20 @@ def test_a_speed_that_follows_otherwise_than_modelled_is_structure():
     assert sig["structured"] and sig["hint"].startswith("the measured speed departs from the model's by up to")
     assert float(sig["hint"].split("rpm, ")[1].split(" times")[0]) > SPEED_EXCESS
     assert not residual_signature(compare(m0, plant), setup.n)["hint"].startswith("the measured speed departs")
+
+
+def test_a_low_order_of_the_kiln_speed_points_to_a_pinion():
+    """Truth by arithmetic: at 500 rpm and n = 1076.5 the kiln turns once in 129 s; a line at 7.2 times that
+    (red team 12's pinion eccentricity) is named as a pinion's order, not a girth gear's teeth, and the motor's
+    order (0.01) is left out; at 240 times (a girth gear's teeth) the girth gear is named."""
+    from kilnctl.measure.signature import _shaft_orders
+
+    t = np.arange(0.0, 60.0, 0.02)
+    speed = np.full(t.size, 500.0)
+    n = 1076.5
+    f_kiln = 500.0 / 60.0 / n
+    low = _shaft_orders(7.2 * f_kiln, 1.0 / 60.0, speed, t, n, 0.0)
+    assert low.startswith("; about 7 (+-") and "a pinion turns" in low and "girth gear of that many" not in low
+    assert "motor's rotation" not in low
+    high = _shaft_orders(240 * f_kiln, 0.1, speed, t, n, 0.0)
+    assert "girth gear of that many teeth" in high and "motor's rotation" in high

@@ -350,8 +350,10 @@ def judge(m, name, cal, current, scales, train, test, exp, wall_s, *, min_delta_
                   f"it out: BIC with the coloured noise modelled rises ({dbic_corr:+.1f}) and the held-out gain is "
                   f"within {min_holdout_z:g} standard errors of none: likely the record's slowly correlated noise")
     elif ok_bic and ok_robust:
+        worse = (f"the held-out part is predicted worse by {-gain:.1f} %, within {min_holdout_z:g} standard errors "
+                 "of no change" if gain < 0 else "the held-out part is predicted no worse")
         reason = (f"supported: {why}, but BIC with the coloured noise modelled falls by {-dbic_corr:.1f} "
-                  f"(> {min_delta_bic:g}) and the held-out part is predicted no worse")
+                  f"(> {min_delta_bic:g}) and {worse}")
     elif not ok_bic:
         reason = f"BIC does not improve enough (dBIC {dbic:+.1f} >= {-min_delta_bic:g})"
     else:

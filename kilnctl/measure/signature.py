@@ -345,10 +345,18 @@ def _shaft_orders(f_hz: float, df_hz: float, speed_rpm, t, n: float, steady_from
         kiln = (f", and {order_k:.0f} times the kiln's ({1.0 / f_kiln:.0f} s a turn)"
                 + (": a whole multiple, as a girth gear's tooth passing" if abs(order_k - round(order_k)) <= spread_k
                    else ""))
+    elif order_k <= 30:
+        # a low order of the kiln's speed is a shaft between kiln and motor, not a girth gear's teeth (red team 12:
+        # a pinion's eccentricity at 7.2 times the kiln's speed had been offered as gear teeth or converter ripple)
+        kiln = (f", and about {order_k:.0f} (+-{spread_k:.0f}) times the kiln's ({1.0 / f_kiln:.0f} s a turn): a "
+                "pinion turns as many times faster than the kiln as the girth gear has teeth per pinion tooth (its "
+                "run-out or eccentricity makes that order); twice the kiln's speed is an oval shell")
     else:
         kiln = (f", and about {order_k:.0f} (+-{spread_k:.0f}) times the kiln's ({1.0 / f_kiln:.0f} s a turn), "
                 "which this record cannot tell from a whole multiple: a girth gear of that many teeth would make it "
                 "(compare with the drive's)")
+    if order_m < 0.05:  # far below the motor's speed: its order says nothing
+        return kiln.replace(", and", ";", 1)
     return motor + kiln
 
 
@@ -481,7 +489,8 @@ def residual_signature(comp: Comparison, n: float, steady_from: float | None = N
                               "near 0.34 Hz with Table 1, whose frequency the burden's J_v and L set)"
                               if line["hz"] < 1.0 else "")
                            + ", or a converter's ripple aliased by the logger's sampling"
-                           + _alias_note(line["hz"], 1.0 / dt))
+                           + _alias_note(line["hz"], 1.0 / dt)
+                           + _shaft_orders(line["hz"], 1.0 / float(t[-1] - t[0]), speed, t, n, steady_from))
     if step_key is not None:
         hints[step_key] = (f"a change outside the catalogue: a step of {step['size']:+.0f} A in the current at "
                            f"t = {step['t']:.1f} s while the drive runs at its set speed (a load step, a process "
