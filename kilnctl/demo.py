@@ -135,9 +135,9 @@ def main(argv=None) -> int:
           f"criterion\n  (negative favours the effect, below {-crit.min_delta_bic:g} counts); held-out gain: better "
           f"prediction of the samples not fitted\n  (above {crit.min_holdout_gain:g} % counts). An effect is "
           "supported when it passes both\n  (or, with the noise's colour modelled, its BIC still falls and the "
-          "held-out part is no worse); the best one is\n  added and the search repeats. At the end each added "
-          "effect is tested again without it (backward check),\n  and against the rivals it beat by less than the "
-          "threshold, each and the closest two together put in its place\n  (swap check).")
+          "held-out part is worse by less than 2 standard\n  errors); the best one is added and the search repeats. "
+          "At the end each added effect is tested again without it\n  (backward check), and against the rivals it "
+          "beat by less than the threshold, each and the closest two together put\n  in its place (swap check).")
 
     diagnose_example(out, progress=lambda line: print("  " + line))
     print(f"  ({time.perf_counter() - t0:.1f} s)")
