@@ -289,7 +289,12 @@ class Effect:
         lo, hi = self.plausible[name]
         if params is None or self.scale is None or name.startswith("phi") or name in self.relative_plausible:
             return lo, hi
-        factor = float(self.scale(params)[0])
+        try:
+            factor = float(self.scale(params)[0])
+        except (ArithmeticError, KeyError, AttributeError):
+            return lo, hi  # a setup the scale cannot be read from (a zero set speed): the written range
+        if not (math.isfinite(factor) and factor > 0):
+            return lo, hi
         return lo * factor, hi * factor
 
     def form(self, name: str | None) -> Form | None:
