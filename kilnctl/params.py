@@ -703,20 +703,43 @@ class Parameters(Mapping):
             A key is unknown or a value impossible; the message names the file.
         """
         path = Path(path)
-        raw = read_toml(path, "configuration file")
+        return cls.from_sections(read_toml(path, "configuration file"), str(path))
+
+    @classmethod
+    def from_sections(cls, raw: Mapping, source: str) -> "Parameters":
+        """Build a parameter set from a parsed TOML document (the one reading of every kilnctl parameter file).
+
+        Parameters
+        ----------
+        raw : mapping
+            Keys at the top level or inside the sections of :data:`GROUPS`; a ``[measurement]`` section is
+            skipped (the measurement tools read it), ``motors`` in ``[motor]`` is folded (:func:`fold_motors`).
+        source : str
+            The file, for the messages.
+
+        Returns
+        -------
+        Parameters
+
+        Raises
+        ------
+        ConfigFileError
+            An unknown section, or a bad ``motors``.
+        ParameterError
+            A key is unknown or a value impossible; the message names ``source``.
+        """
         flat: dict[str, Any] = {}
         for key, value in raw.items():
             if key == MEASUREMENT_SECTION and isinstance(value, dict):
                 continue  # the experiment's options, not parameters: checked by kilnctl.measure.load_setup
             if isinstance(value, dict):
                 if key not in GROUPS:
-                    raise ConfigFileError(
-                        f"{path}: unknown section [{key}]: {close_matches_hint(key, GROUPS)}")
-                for k, v in value.items():
-                    flat[k] = v
+                    raise ConfigFileError(f"{source}: unknown section [{key}]: "
+                                          f"{close_matches_hint(key, list(GROUPS) + [MEASUREMENT_SECTION])}")
+                flat.update(value)
             else:
                 flat[key] = value
         try:
-            return cls(fold_motors(flat, str(path)))
+            return cls(fold_motors(flat, source))
         except ParameterError as exc:
-            raise ParameterError(f"{path}: {exc}") from None
+            raise ParameterError(f"{source}: {exc}") from None

@@ -26,13 +26,13 @@ import os
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Mapping
 
 import numpy as np
 
 from ..errors import ConfigFileError, DataError, ParameterError, close_matches_hint
 from ..files import read_toml
-from ..params import GROUPS, SPECS, Parameters, fold_motors
+from ..params import SPECS, Parameters
 from ..units import RPM_PER_RAD_S
 from .clipping import clipped_levels, clipped_notes, unclipped
 from .glitches import glitch_mask, glitch_notes, glitches
@@ -1369,19 +1369,7 @@ def load_setup(path=None) -> Setup:
             raise ConfigFileError(f"{path}: [measurement] columns must be a table, e.g. "
                                   "columns = {current_A = \"I_arm\", speed_rpm = \"n_mot\"}")
         options["columns"] = parse_columns(options["columns"], f"{path}: [measurement] columns")
-    flat: dict[str, Any] = {}
-    for key, value in raw.items():
-        if isinstance(value, dict):
-            if key not in GROUPS:
-                raise ConfigFileError(f"{path}: unknown section [{key}]: "
-                                      f"{close_matches_hint(key, list(GROUPS) + ['measurement'])}")
-            flat.update(value)
-        else:
-            flat[key] = value
-    try:
-        params = Parameters(fold_motors(flat, str(path)))
-    except ParameterError as exc:
-        raise ParameterError(f"{path}: {exc}") from None
+    params = Parameters.from_sections(raw, str(path))
     for k in options.get("calibrate", []):
         if k not in SPECS or SPECS[k].is_option:
             raise ConfigFileError(f"{path}: [measurement] calibrate names {k!r}, not a numeric parameter: "

@@ -194,11 +194,6 @@ class KnotsFit:
         """Highest knot value [rpm]."""
         return max(self.values)
 
-    @property
-    def first_top(self) -> float:
-        """Time, from ``t0``, at which the reference first reaches within 2 % of its top [s]."""
-        return next(t for t, w in zip(self.times, self.values) if w >= 0.98 * self.top)
-
     def describe(self) -> str:
         """The knots in words: ``0 -> 750 rpm at 50 rpm/s, hold 20.0 s, 750 -> 500 rpm at -50 rpm/s``."""
         parts, t_prev, w_prev = [], 0.0, 0.0
