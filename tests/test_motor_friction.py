@@ -76,3 +76,17 @@ def test_ramp_optimizer_takes_the_smooth_twin_and_agrees_with_the_hybrid_verific
     assert pred.peak_current_A == pytest.approx(hyb.peak_current_A, rel=0.01)
     plain, _ = measure_hybrid(p, prof, [74.0], horizon)
     assert hyb.peak_current_A > plain.peak_current_A  # the friction adds to the current
+
+
+@pytest.mark.parametrize("a_cm", [0.5, 1.0])
+def test_the_falling_form_loses_a_cm_of_the_friction_at_the_set_speed(a_cm):
+    # hand formula: the falling form's friction on the turning shaft is T_cm (1 - a_cm w/w_set); at constant
+    # speed (w = w_set) the current rises by T_cm (1 - a_cm)/k_i over the run without friction, and on the ramp,
+    # where the speed follows the reference as in the run without friction, by T_cm (1 - a_cm w(t)/w_set)/k_i
+    p = Parameters(T_cm=100.0, a_cm=a_cm)
+    base = _run(p)
+    fall = _run(p, (FRICTION, "motor_friction_falloff"))
+    assert fall["i_a"][-1] - base["i_a"][-1] == pytest.approx(p.T_cm * (1.0 - a_cm) / p.k_i, abs=1e-6)
+    k = np.searchsorted(fall.t, 4.0)  # on the ramp (it ends at 1 + 500/74 = 7.8 s)
+    expected = p.T_cm * (1.0 - a_cm * fall["speed_rpm"][k] / p.omega_ref) / p.k_i
+    assert fall["i_a"][k] - base["i_a"][k] == pytest.approx(expected, rel=1e-3)  # seen: 9.5838 A for 9.5839

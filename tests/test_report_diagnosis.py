@@ -301,3 +301,21 @@ def test_a_form_refitted_again_against_the_same_model_is_listed_once_and_long_na
             assert numbers[:col].rstrip().endswith("+8.3") or numbers[:col].rstrip().endswith("+7.7")
             assert len(numbers[:col]) == col and numbers[col - 4:col].strip()
     assert sum(x.strip() == "speed_sensor_lag (second_order form)" for x in lines) == 2
+
+
+def test_headline_gives_the_base_its_own_share_of_the_rise():
+    # truth: hand-built diagnoses after red team 12's R16 (no effect, slow noise): the base calibrated from the
+    # setup fitted 84.7 %, the same base re-anchored in round 1 92.0 %, the final model with an unbalance 92.5 %;
+    # the headline gave the unbalance the whole rise.  A re-anchoring of less than a point is not mentioned.
+    def diag(base_refit):
+        d = hand_built()
+        d.baseline_ = {"current_A": 84.7, "speed_rpm": 99.8}
+        d.final_ = {"current_A": 92.5, "speed_rpm": 99.9}
+        d.base_refit_ = {"current_A": base_refit, "speed_rpm": 99.9}
+        return d
+
+    assert report.diagnosis_headline(diag(92.0)).endswith(
+        "(the base model alone, calibrated again from a better start, reaches 92.0 %)")
+    assert "Of that rise, 7.3 points are the base model's own" in report.diagnosis_plain_headline(diag(92.0))
+    for text in (report.diagnosis_headline(diag(85.2)), report.diagnosis_plain_headline(diag(85.2))):
+        assert "better start" not in text

@@ -192,6 +192,7 @@ def effect_cautions(d, m, exp, params) -> list[str]:
         if not any(r is a for a in judged):  # a pair added both its effects: its rivals are named once
             judged.append(r)
             out += rival_texts(d, r)
+        out += form_rival_texts(d, name)
         # the usual ranges scaled to this drive at the recorded set speed
         for note in eff.plausibility(d.final_calibration_.values_, params.replace(omega_ref=exp.omega_ref)):
             out.append(f"{name}: {note} (a value outside the usual range is reported, not refused)")
@@ -344,6 +345,49 @@ def rival_texts(d, r) -> list[str]:
                    + _swap_words(r.effect, [c.effect for c in whitened], tried)
                    + f": on this record they change the current much as {r.effect} does, and any of them may be "
                    f"the cause. {_DECIDES}")
+    return out
+
+
+def form_rival_texts(d, effect: str) -> list[str]:
+    """A caution when a selected effect, kept in its own form, was refitted in another of its forms that tells
+    another story (:attr:`~kilnctl.model.catalogue.Form.alike`) and fitted about as well: its dBIC against the
+    effect's own form below the BIC threshold (it pays for its added parameter and still fits as well).  On red
+    team 12's R15 a roller friction falling to nothing at the set speed was selected as a constant motor
+    friction with a burden 5 % light; the falling form, with the plant's burden, fitted as well (dBIC -52.6,
+    whitened +11.3, held-out +0.6 %) but not better by every test.
+
+    Parameters
+    ----------
+    d : Diagnosis
+        The fitted diagnosis (its forms tried, ``form_results_``, and the forms kept, ``forms_``).
+    effect : str
+        A selected effect.
+
+    Returns
+    -------
+    list of str
+    """
+    if effect in (getattr(d, "forms_", None) or {}):
+        return []
+    entries = [e for e in getattr(d, "form_results_", None) or []
+               if e[0] == effect and not e[3] and set(e[4]) <= set(d.selected_)]
+    out = []
+    for form in CATALOGUE[effect].forms:
+        tried = [e for e in entries if e[1] == form.name]
+        if not tried or form.alike is None:
+            continue
+        ev = tried[-1][2]
+        cal = ev.calibration
+        if cal is None or not ev.delta_bic < d.min_delta_bic:
+            continue
+        # against the final model's values: the constant friction and the burden the report gives
+        story = form.alike(cal.values_, d.final_calibration_.values_)
+        if story is None:
+            continue
+        out.append(f"{effect}: in its {form.name} form it fits this record about as well ({story}; dBIC "
+                   f"{ev.delta_bic:+.1f} against its own form, {ev.delta_bic_corrected:+.1f} with the noise's "
+                   f"correlation modelled, held-out gain {ev.holdout_gain:+.1f} %): the record hardly tells the "
+                   f"two apart. {_DECIDES}")
     return out
 
 

@@ -156,6 +156,10 @@ class Diagnosis:
         Fit % per channel of the calibrated base model on the whole record.
     base_calibration_ : Calibration
         That calibration.
+    base_refit_ : dict
+        Fit % per channel of the base model as the greedy rounds last held it, on the fitting part (higher
+        than ``baseline_`` when a round re-anchored it in a better valley: that part of the rise is the
+        base's, not an effect's).
     rounds_ : list of list of CandidateResult
         Candidates of each greedy round, ranked (supported first, by delta BIC).
     ranking_ : list of CandidateResult
@@ -584,6 +588,7 @@ class Diagnosis:
         self.removed_ = list(self.removed_) + dropped
         self.final_search_["then_removed"] = [r.effect for r in dropped]
         self.base_calibration_ = base
+        self.base_refit_ = dict(fitted[()].fit_percent_)
         self.final_calibration_ = final
         self.baseline_ = dict(base.fit_percent_)
         self.final_ = dict(final.fit_percent_)
@@ -701,7 +706,7 @@ class Diagnosis:
             own = dict(results[i].calibration.values_)
             args.append((dict(self._forms, **{results[i].effect: form.name}),
                          (m, params, tuple(selected) + (results[i].effect,), scales, train, dict(own, **form.near),
-                          list(form.starts(own)), exp, ff, results[i].effect, 1)))
+                          list(form.starts(own)), exp, ff, results[i].effect, form.local_fits)))
         t_start = time.perf_counter()
         cals = self._run_calibrations([a for _, a in args], pool, [forms for forms, _ in args])
         wall = (time.perf_counter() - t_start) / len(jobs)

@@ -103,6 +103,17 @@ class Form:
         its own form describes too coarsely to win (a converter's PI current
         limiter, whose overshoot and dip the clamp misses by hundreds of
         amperes).
+    local_fits : int
+        Local fits of the form's refit, from its best starts (one: from the
+        effect's values; more where the form's valley lies away from them,
+        as a falling friction's with a heavier burden).
+    alike : callable or None
+        ``alike(form_values, own_values) -> str or None``: where the form's
+        refit tells another story than the effect's own form (a friction
+        that falls to nothing at the set speed, not a constant one), that
+        story in words; None where they tell the same.  Where the form then
+        fits about as well without being supported, the diagnosis cautions
+        that the record hardly tells the two apart.
     """
 
     name: str
@@ -114,6 +125,8 @@ class Form:
     ends: dict = field(default_factory=dict)
     in_rounds: bool = True
     unsupported_too: bool = False
+    local_fits: int = 1
+    alike: Callable | None = field(repr=False, default=None)
 
 
 def _table1() -> Parameters:

@@ -34,11 +34,23 @@ import casadi as ca
 
 from ..params import param
 from .base import Component, Guard, register
-from .catalogue import Effect, FreeParameter, motor_torque_scale
+from .catalogue import Effect, Form, FreeParameter, motor_torque_scale
 
 #: motor speed over which the smooth twin regularises the friction's sign, and the scale of the stick guards
 #: [rad/s]
 MOTOR_FRICTION_OMEGA = 1e-2
+
+
+def _falling_story(form_values: dict, own_values: dict) -> str | None:
+    """The falling form's story where it differs from a constant friction (a_cm >= 0.3), in words."""
+    a = form_values.get("a_cm", 0.0)
+    if a < 0.3:
+        return None
+    s = (f"a friction of {form_values['T_cm']:.3g} N*m at rest falling by {100 * a:.0f} % at the set speed, "
+         f"against a constant {own_values['T_cm']:.3g} N*m")
+    if "m_v" in form_values and "m_v" in own_values:
+        s += f", with a burden of {form_values['m_v'] / 1e3:.1f} t against {own_values['m_v'] / 1e3:.1f} t"
+    return s
 
 
 @register
@@ -74,7 +86,29 @@ class MotorCoulombFriction(Component):
             "the ramp and at steady speed (a viscous drag instead grows with the speed), and a motor that "
             "starts a little late, once the current has reached T_cm/k_i",
             starts=lambda params, m: [{"T_cm": 20.0}, {"T_cm": 60.0}, {"T_cm": 200.0}],
-            plausible={"T_cm": (10.0, 100.0)}, null={"T_cm": 0.0}, scale=motor_torque_scale),
+            plausible={"T_cm": (10.0, 100.0)}, null={"T_cm": 0.0}, scale=motor_torque_scale,
+            notes="a friction that falls with the speed (support rollers or bearings lifting onto their oil film) "
+                  "is its 'falling' form, tried in each round where it is supported: on one set speed a constant "
+                  "friction and a lighter burden, or a falling friction and a heavier one, draw the same steady "
+                  "current, and only the ramp tells them apart.",
+            forms=(Form("falling",
+                        "a friction of T_cm at rest that falls in proportion to the motor speed, by a_cm T_cm at "
+                        "the set speed (support rollers or bearings lifting onto their oil film): "
+                        "T_cm (1 - a_cm omega_m/omega_set)",
+                        ("motor_coulomb_friction", "motor_friction_falloff"),
+                        (FreeParameter("a_cm", 0.0, 1.0, "lin", 0.5),),
+                        near={"a_cm": 0.0},
+                        # the constant friction fitted to a falling one is held at the set speed by a lighter
+                        # burden: each start keeps the friction at the set speed, T_cm (1 - a_cm), where the
+                        # constant one ended (the steady current unchanged), and the refit moves along that
+                        # valley (a_cm and the burden's mass together) as far as the ramp asks
+                        starts=lambda v: [{"a_cm": a, "T_cm": v["T_cm"] / (1.0 - a)} for a in (0.5, 0.8, 0.95)],
+                        # a friction gone at the set speed is the form's physical limit, not a stand-in's
+                        ends={"a_cm": "upper"},
+                        # the near start alone ends where the constant friction did (a_cm 0): the valley of a
+                        # falling friction is reached from the starts above (red team 12's R17: a_cm 1.0 and
+                        # the plant's burden, 309.7 t for 309)
+                        local_fits=3, alike=_falling_story),)),
     )
 
     def initial_mode(self, params, x0):
@@ -123,3 +157,27 @@ class MotorCoulombFrictionSmooth(MotorCoulombFriction):
 
     def finish(self, e, mode):
         e.add_output("T_fm", e.sig["T_fm"])
+
+
+@register
+class MotorFrictionFalloff(Component):
+    """The motor Coulomb friction falling with speed: torque +a_cm*T_cm*omega_m/omega_set on the motor.
+
+    With :class:`MotorCoulombFriction` (the ``falling`` form of its catalogue effect) the friction on the
+    turning shaft is T_cm*(1 - a_cm*omega_m/omega_set), omega_set the set speed (``omega_ref``, through
+    K_fb): T_cm at rest, T_cm*(1 - a_cm) at the set speed.  Odd in omega_m and zero at rest, so the
+    friction's sticking is the Coulomb component's alone.  Not a catalogue effect of its own.
+    """
+
+    name = "motor_friction_falloff"
+    summary = "motor Coulomb friction falling with speed: +a_cm*T_cm*omega_m/omega_set"
+    param_names = ("a_cm",)
+    requires = ("dc_motor",)
+    parameters = (
+        param("a_cm", 0.0, "-", "assumed: none unless fitted (a friction that lifts off with speed)",
+              "fraction of the motor Coulomb friction T_cm lost at the set speed (component "
+              "'motor_friction_falloff')", "effects", "nonnegative"),
+    )
+
+    def loads(self, e, mode):
+        e.add_torque("motor", e.p.a_cm * e.p.T_cm * e.x["omega_motor"] * e.p.K_fb / e.p.omega_ref)
