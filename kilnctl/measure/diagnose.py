@@ -1051,8 +1051,8 @@ class Diagnosis:
                     if form is not None:  # another effect of the rest in another form, from where it is its own
                         init.update(form.near)
                         starts = tuple(form.starts(final.values_))
-                    jobs.append((e, forms, form, (m, params, rest, "std", None, init, starts, exp, None, None, 1,
-                                                  True)))
+                    jobs.append((e, forms, form, (m, params, rest, "std", None, init, starts, exp, None, None,
+                                                  form.local_fits if form is not None else 1, True)))
             cals = self._run_calibrations([j[3] for j in jobs], pool, [j[1] for j in jobs])
             trials = []
             for e in selected:
@@ -1374,7 +1374,8 @@ class Diagnosis:
           values.  The current structure is refitted with a step b H(t - tau) of the current added (tau from
           1.5 s after the ramp's end to 2 s before the record's end; b and tau in closed form at every trial,
           :class:`~kilnctl.measure.outside.CurrentStep`).
-        - A slow drift, when the best supported candidate is periodic (a kiln unbalance) and the record lasts
+        - A slow drift, when the best supported candidate (or, with none supported, the best that the plain
+          tests support) is periodic (a kiln unbalance) and the record lasts
           at least its period: a current-sensor offset drifting as the electronics warm up was taken for a
           kiln unbalance of 4.8e4 N m on a record of 140 s, where an unbalance rises and falls once.  The
           current structure is refitted with a straight line a + b (t - t_start) of the current over the
@@ -1395,9 +1396,13 @@ class Diagnosis:
             wins; else None.
         """
         supported = [r for r in results if r.supported]
-        if not supported:
+        # ... or, with none supported, the best candidate that the plain tests support (BIC and the held-out
+        # blocks) and the stricter ones do not: a kiln unbalance imitating a drifting sensor offset, rejected
+        # because BIC with the coloured noise modelled rises, still leaves the drift to be named
+        plain = [r for r in results if r.delta_bic < -self.min_delta_bic and r.holdout_gain > self.min_holdout_gain]
+        if not supported and not plain:
             return None
-        best = supported[0]
+        best = supported[0] if supported else min(plain, key=lambda r: r.delta_bic)
         active = m.t >= exp.t0 - 1e-9
         t = m.t[active]
         terms = []
@@ -1446,6 +1451,9 @@ class Diagnosis:
             c.supported = False
             c.reason = (f"{text}; it explains the record better (dBIC {r.delta_bic:+.1f} against "
                         f"{c.delta_bic:+.1f}): this effect only imitates part of it")
+        if not supported:
+            best.reason += (f"; and {text} explains the record better (dBIC {r.delta_bic:+.1f} against "
+                            f"{best.delta_bic:+.1f}): this effect only imitates part of it")
         if term.kind == "step":
             values = {"t": fitted["t"], "size_A": fitted["size"]}
             where = f"abrupt change at t = {fitted['t']:.1f} s"
