@@ -101,3 +101,24 @@ def test_a_converter_off_at_rest_is_no_clipped_range(record):
     moved = np.roll(cur, 400)
     (c,) = clipped_levels({"current_A": moved}, SETUP.I_max)
     assert (c.side, c.level, c.n) == ("lower", 0.0, 40)
+
+
+def test_a_speed_counted_in_steps_that_holds_its_set_point_is_not_clipped(record):
+    # truth (red team 13's enc_B): an encoder counted over each sample reads the speed in whole steps; while the
+    # speed's ripple stays inside one step it reads the set point exactly, on most of the record.  That is the
+    # speed loop holding 500 rpm, not a logger's range: nothing is left out, and the staircase of the ramp is
+    # no "noise-free straight ramp" of a reference.  A speed cut below its set point is still clipped.
+    m, _ = make_record(seed=4, t_end=40.0, mismatch=(), white=(4.0, 0.0), coloured=(4.0, 0.0))
+    steps = 2.0 * np.round(m.speed / 2.0)
+    counted = Measurement.from_arrays(m.t, m.current, steps, m.speed_ref, params=SETUP)
+    at_top = np.mean(steps == steps.max())
+    assert steps.max() == SETUP.omega_ref and at_top > 0.6, at_top  # seen: 0.805 of the record at 500 rpm
+    assert counted.clipped == () and counted.unclipped.all()
+    assert not any("noise-free straight ramp" in n for n in counted.notes)
+    assert any("logged in steps of 2 rpm" in n for n in counted.notes)
+    # without a logged reference the setup's set speed says the same
+    assert clipped_levels({"speed_rpm": steps}, SETUP.I_max, (SETUP.omega_ref,)) == []
+    # a logger's range of 480 rpm, below the set point, is a clipped range
+    cut = np.minimum(record.speed, 480.0)
+    (c,) = clipped_levels({"speed_rpm": cut}, SETUP.I_max, (SETUP.omega_ref,))
+    assert (c.channel, c.level) == ("speed_rpm", 480.0)

@@ -32,7 +32,11 @@ CLIP_RATIO = 5.0
 #: or follows a limit, holds it exactly, and 6 significant digits round at 1e-6 of the value
 NOISE_REL = 2e-5
 #: an upper (lower) level of the current within this fraction of the setup's I_max (-I_max) is the drive's own
-#: current limit, which a record without noise holds exactly, not the logger's range [-]
+#: current limit, which a record without noise holds exactly, not the logger's range [-]; so is a speed level
+#: within this fraction of the set speed (or within one step of a speed logged in steps), the speed loop
+#: holding its set point: an encoder counted over each sample reads it exactly while the speed's ripple stays
+#: inside one count (red team 13's speed in 2 rpm steps at its 600 rpm set point: 71 % of the record, both
+#: channels, had been left out as clipped, and the base calibrated on the ramp alone, mu_c 30 % high)
 DRIVE_LIMIT_TOL = 0.01
 
 
@@ -65,7 +69,7 @@ class ClipLevel:
         return np.asarray(values, float) == self.level
 
 
-def clipped_levels(arrays, i_max: float | None = None) -> list[ClipLevel]:
+def clipped_levels(arrays, i_max: float | None = None, set_speeds=()) -> list[ClipLevel]:
     """The logged channels' clipped ends: a largest or smallest value held by many samples.
 
     Parameters
@@ -75,6 +79,10 @@ def clipped_levels(arrays, i_max: float | None = None) -> list[ClipLevel]:
     i_max : float, optional
         The setup's armature current limit [A]: a level within :data:`DRIVE_LIMIT_TOL` of it is the drive's
         limit, not the logger's.
+    set_speeds : sequence of float
+        The set speeds the drive may hold [rpm] (the setup's omega_ref, the logged reference's top): a speed
+        level within :data:`DRIVE_LIMIT_TOL` of one, or within one step of a speed logged in steps
+        (:func:`~kilnctl.measure.logger.speed_step`), is the speed loop holding it, not the logger's range.
 
     Returns
     -------
@@ -95,6 +103,8 @@ def clipped_levels(arrays, i_max: float | None = None) -> list[ClipLevel]:
             level = float(values[k])
             if name == "current_A" and i_max and abs(abs(level) - i_max) <= DRIVE_LIMIT_TOL * i_max:
                 continue
+            if name == "speed_rpm" and _holds_set_speed(a, level, set_speeds):
+                continue
             at_mask = a == level
             if _noise(a, at_mask) < NOISE_REL * float(np.max(np.abs(a))):
                 continue
@@ -106,6 +116,23 @@ def clipped_levels(arrays, i_max: float | None = None) -> list[ClipLevel]:
                 continue
             out.append(ClipLevel(name, side, level, n_at, int(others.max()) if others.size else 0))
     return out
+
+
+def _holds_set_speed(speed, level: float, set_speeds) -> bool:
+    """True when a speed level lies within :data:`DRIVE_LIMIT_TOL` of a set speed, or within one of the
+    speed's logged steps."""
+    from .logger import speed_step
+
+    step = None
+    for w in set_speeds:
+        if w is None or not np.isfinite(w) or w == 0:
+            continue
+        if abs(abs(level) - abs(w)) <= DRIVE_LIMIT_TOL * abs(w):
+            return True
+        step = speed_step(speed) if step is None else step
+        if step and abs(abs(level) - abs(w)) <= step:
+            return True
+    return False
 
 
 def unclipped(levels, channels) -> np.ndarray | None:

@@ -36,7 +36,7 @@ from ..params import SPECS, Parameters
 from ..units import RPM_PER_RAD_S
 from .clipping import clipped_levels, clipped_notes, unclipped
 from .glitches import glitch_mask, glitch_notes, glitches
-from .logger import frozen_notes, resampled_every, resampled_notes, sampling_notes, speed_step_notes
+from .logger import frozen_notes, resampled_every, resampled_notes, sampling_notes, speed_step, speed_step_notes
 from .reference import fit_knots, fit_scurve, scurve_values
 
 __all__ = ["Measurement", "Setup", "Experiment", "read_csv", "read_record", "load_setup", "REQUIRED", "OPTIONAL",
@@ -889,8 +889,10 @@ def _speed_column_notes(arrays, parsed, names, found, kept, columns) -> list[str
         dt = float(np.median(np.diff(t)))
         # a record resampled from a coarser logger is straight between its samples too: that is said apart
         # (red team 7: an interpolated 200 Hz export read as "looks like the speed reference")
+        # nor is a speed counted in an encoder's steps (its changes are whole steps, equal on a steady ramp:
+        # red team 13's speed in 2 rpm steps)
         if np.isfinite(change).all() and np.median(change) * dt < 1e-6 * top \
-                and resampled_every(arrays.get("current_A")) is None:
+                and resampled_every(arrays.get("current_A")) is None and speed_step(v) is None:
             out.append(f"speed_rpm ({names[j_speed]!r}) rises as a noise-free straight ramp: it looks like the speed "
                        "reference, not the measured motor speed; map the measured speed with --columns "
                        "speed_rpm=NAME")
@@ -1071,7 +1073,9 @@ def _checked(arrays, lines, source, params, notes, row_word, labels=None, log=Fa
     _check_units(arrays, lines, source, params, row_word, labels, log)
     clipped = spikes = ()
     if not log:
-        clipped = tuple(clipped_levels(arrays, params.I_max))
+        ref = arrays.get("speed_ref_rpm")
+        tops = (params.omega_ref,) + ((float(np.max(np.abs(ref))),) if ref is not None and ref.size else ())
+        clipped = tuple(clipped_levels(arrays, params.I_max, tops))
         spikes = glitches(arrays)
         kept = unclipped(clipped, arrays)
         if kept is not None and kept.sum() < MIN_SAMPLES:
