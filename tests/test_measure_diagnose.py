@@ -1336,3 +1336,24 @@ def test_the_final_stick_slip_search_is_run_again_from_the_setup_when_it_ends_fa
         assert out is found
     else:
         assert out.cost_ == 0.36 and out.local_fits_ == ["f1", "f2", "a1"] and out.n_starts_ == 51
+
+
+def test_a_selection_on_marginal_evidence_is_cautioned():
+    # truth: red team 13's dfilt_A at 155d980 (its diagnose.json): a speed-sensor lag of 2.8 ms added at dBIC
+    # -10.6, whitened -28.5, held-out +0.3 % (0.4 standard errors), where the plant has none (its derivative acts
+    # through a 0.1 s filter); strong evidence, or a held-out gain beyond its threshold or one standard error,
+    # gets no such caution
+    from kilnctl.measure.cautions import marginal_texts
+    from kilnctl.measure.diagnose import CandidateResult
+
+    (text,) = marginal_texts("speed_sensor_lag", -10.6, 0.3, 0.42, 10.0, 2.0)
+    assert text.startswith("speed_sensor_lag: the evidence is marginal: BIC falls by 10.6, within twice the "
+                           "threshold of 10, and the held-out part is predicted no better (+0.3 %, +0.4 standard "
+                           "errors)")
+    for args in ((-25.0, 0.3, 0.42), (-10.6, 2.5, 0.42), (-10.6, 0.3, 1.2)):
+        assert marginal_texts("speed_sensor_lag", *args, 10.0, 2.0) == []
+    d = _selected("speed_sensor_lag", -28.5, {"tau_s": 0.0028})
+    d.rounds_[0][0] = CandidateResult("speed_sensor_lag", -10.6, 0.3, {}, {}, {}, [], [], True, "", 0.0,
+                                      delta_bic_corrected=-28.5, holdout_z=0.42)
+    m, _ = make_record((), seed=0, t_end=4.0)
+    assert effect_cautions(d, m, _exp(), SETUP) == [text]
