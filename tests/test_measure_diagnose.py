@@ -881,6 +881,10 @@ def test_rival_caution_of_a_pair_is_given_once():
     assert len(texts) == 1
     assert texts[0].startswith("torque_friction_law+second_motor was preferred to torque_friction_law+viscous_drag "
                                "by a BIC difference of only 7.0")
+    # the second motor removed later by the backward check (red team 13's torque_B: a current limit so): the
+    # rival pair was a rival of what is gone, and nothing is said of it
+    d.selected_ = ["torque_friction_law"]
+    assert not any("preferred" in t for t in effect_cautions(d, m, _exp(), SETUP))
 
 
 def test_base_values_far_from_the_setup_are_named_and_near_ones_are_not():

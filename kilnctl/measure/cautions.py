@@ -298,7 +298,7 @@ def rival_texts(d, r) -> list[str]:
     round) is none.  The winner has the lowest dBIC of the round's supported candidates (``diagnose._rank``),
     so a rival's gap is negative only for an effect the swap check put in the place of the round's winner
     (that story is told with the removed effects); such rivals, with a lower dBIC than ``r``, get no caution
-    here.
+    here.  A pair of which an effect was removed later has no rivals left to name.
 
     Parameters
     ----------
@@ -311,6 +311,11 @@ def rival_texts(d, r) -> list[str]:
     -------
     list of str
     """
+    if not set(r.effect.split("+")) <= set(d.selected_):
+        # a pair of which the backward or swap check removed one: its rivals were rivals of what is gone (red
+        # team 13's torque law + current limit, the limit removed, cautioned against the torque law + a motor
+        # friction)
+        return []
     rnd = next((rd for rd in d.rounds_ if any(c is r for c in rd)), [])
     kept = set(d.selected_) | set(r.effect.split("+"))
     tried = getattr(d, "swap_tried_", None) or set()
