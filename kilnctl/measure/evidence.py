@@ -234,9 +234,6 @@ class CandidateResult:
 
 #: current fit [%] from which the current model's residual is taken to be mostly noise (see :func:`judge`)
 NOISE_FIT = 90.0
-#: held-out loss [%] beyond which a candidate is not supported where the current model fits within noise and
-#: the loss exceeds one standard error (see :func:`judge`)
-MAX_HELDOUT_LOSS = 10.0
 
 
 def close_rival(winner, rival, threshold: float) -> bool:
@@ -339,15 +336,6 @@ def judge(m, name, cal, current, scales, train, test, exp, wall_s, *, min_delta_
     # sample off, which doubles their squared error without being evidence against it (the torque friction
     # law on a torque law + compliance record: -112 %, -1.6 standard errors, and needed)
     ok_robust = dbic_corr < -min_delta_bic and gain_z > -min_holdout_z
-    # ... nor, where the current model fits within noise, worse by more than MAX_HELDOUT_LOSS and by more than
-    # one standard error: a loss that large falls on few samples (a change at the start-up that lines up the
-    # fitting part's breakaway), and their spread keeps it inside two standard errors.  Red team 12's R07 (a
-    # support-roller friction lifting off in the first second, outside the catalogue) took a motor Coulomb
-    # friction so: -54.0 % at -1.96 standard errors.  True effects so accepted lost at most 5.5 % there (a
-    # backlash, 91 % fit before), or more but within one standard error (a 10 Hz speed filter on 20 s,
-    # tests/test_speed_filter.py: -33 % at -0.4, whitened dBIC -82)
-    lossy = close and gain < -MAX_HELDOUT_LOSS and gain_z < -1.0
-    ok_robust = ok_robust and not lossy
     # ... except when the record hunts and the current model's cycle runs at its frequency: the cycle's
     # phase over the record moves with every parameter (on a 30 ms lag record a motor Coulomb friction of
     # 1 N m, a fifth of an ampere, moved the cost by a third), so a refit with any added parameter tunes it
@@ -369,11 +357,6 @@ def judge(m, name, cal, current, scales, train, test, exp, wall_s, *, min_delta_
         reason = (f"BIC improves and the held-out part is predicted better ({why}), but BIC with the coloured "
                   f"noise modelled rises ({dbic_corr:+.1f}) where the model already fits within its noise: the "
                   f"held-out blocks share the fitting blocks' slowly correlated noise, which the change follows")
-    elif ok_bic and lossy and dbic_corr < -min_delta_bic and gain_z > -min_holdout_z:
-        reason = (f"BIC improves, also with the coloured noise modelled ({dbic_corr:+.1f}), but the held-out "
-                  f"part is predicted worse by {-gain:.1f} % ({gain_z:+.1f} standard errors), more than "
-                  f"{MAX_HELDOUT_LOSS:g} % and one standard error where the model already fits within its noise: "
-                  f"the change lines up the fitting part only")
     elif ok_bic and noise_like:
         reason = (f"BIC improves and the held-out part is predicted slightly better ({why}), but neither bears "
                   f"it out: BIC with the coloured noise modelled rises ({dbic_corr:+.1f}) and the held-out gain is "
