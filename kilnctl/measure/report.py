@@ -817,7 +817,7 @@ def plot_ranking(d, fig=None):
     rk = d.ranking_
     fig = fig or Figure(figsize=(13, 2.8 + 0.3 * max(len(rk), 4)))  # the first panel's legend below it
     a0, a1, a2 = fig.subplots(1, 3, gridspec_kw={"width_ratios": [3, 3, 2]})
-    names = [r.effect for r in rk]
+    names = [r.effect + (f" ({r.form})" if r.form else "") for r in rk]
     colors = [COLORS["supported"] if r.supported else COLORS["rejected"] for r in rk]
     y = np.arange(len(rk))
     def clipped(v):
@@ -987,11 +987,13 @@ HOW_TO_READ = {
                                  "than {min_delta_bic:g} with the coloured noise modelled, and a held-out loss of "
                                  "less than {holdout_z:g} standard errors. Where the model already fits closely, "
                                  "a small gain must also be borne out: by the whitened dBIC, or by more than "
-                                 "{holdout_z:g} standard errors. An effect is <b>supported</b> only when it passes "
-                                 "both tests."),
+                                 "{holdout_z:g} standard errors; and no gain counts when the whitened dBIC rises "
+                                 "by more than {min_delta_bic:g} (slow noise links the held-out blocks to their "
+                                 "neighbours). An effect is <b>supported</b> only when it passes both tests."),
     "cautions": ("cautions", "Where the evidence is weaker than the numbers suggest (a record shorter than the "
-                             "effect's period, a strongly autocorrelated residual, another effect that explains the "
-                             "record about as well). Read them before acting."),
+                             "effect's period, a strongly autocorrelated residual, evidence just past the "
+                             "threshold, another effect or another form of it that explains the record about as "
+                             "well). Read them before acting."),
     "uncertainty": ("± values", "One standard error of a fitted value from the fit's curvature. \"not "
                                 "identifiable\" means the record does not pin the value down: other values fit "
                                 "as well."),
