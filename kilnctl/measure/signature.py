@@ -37,6 +37,9 @@ MATERIAL_FIT_POINTS = 0.2
 #: in about a second (1.1 s to 2 % for a step, the linear loop with the example's gains), so the measured speed
 #: stays away from the model's for longer only while the drive delivers a different torque (or the load differs)
 SPEED_APART_S = 1.0
+#: kiln turns a record must span for the residual's once-per-turn regressor to name a torque that repeats with
+#: each turn without naming a slow drift or slowly correlated noise beside it (:func:`residual_signature`)
+MIN_TURNS = 2.0
 #: fewest spans of a residual whose means give the standard error of a mean (:func:`window_mean_spread`)
 MIN_WINDOWS = 8
 #: a spectral line: the residual's periodogram over the whole record at one frequency, this many times the median
@@ -474,9 +477,15 @@ def residual_signature(comp: Comparison, n: float, steady_from: float | None = N
     following = (not lost and math.isfinite(speed_fit) and speed_fit < SPEED_FIT_STRUCTURE
                  and excess > SPEED_EXCESS)
     structured = bool(correlated or peaked or fails or lost or following)
+    # over fewer than two kiln turns a once-per-turn sinusoid is hardly more than a slow swing, which slowly
+    # correlated noise or a drift also make (red team 12's R03: no effect, AR(1) noise of 2 s, 1.05 turns,
+    # r^2 0.30 and the hint named an unbalance)
+    turns = float(theta[-1] - theta[0]) / (2.0 * math.pi) if theta.size else 0.0
+    few_turns = (f", or a slow drift or slowly correlated noise: the record spans {turns:.2f} kiln turns, too "
+                 "few to tell a once-per-turn torque from them") if turns < MIN_TURNS else ""
     hints = {
         "kiln angle (once per revolution)": "a torque that repeats with each kiln revolution (unbalance, shell "
-                                            "crank, girth-gear run-out)",
+                                            "crank, girth-gear run-out)" + few_turns,
         "speed": "a torque that grows with speed (drag, fan or seal load)",
         "acceleration": "a missing inertia or a torque proportional to acceleration (a coupled motor, flywheel)",
         "current": "something that depends on the current level (a limit, saturation, sensor scale)",
