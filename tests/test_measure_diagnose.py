@@ -1361,3 +1361,19 @@ def test_a_selection_on_marginal_evidence_is_cautioned():
                                       delta_bic_corrected=-28.5, holdout_z=0.42)
     m, _ = make_record((), seed=0, t_end=4.0)
     assert effect_cautions(d, m, _exp(), SETUP) == [text]
+
+
+def test_a_held_out_z_does_not_silence_a_rising_whitened_bic_where_the_model_fits_within_noise():
+    # truth: red team 14's C5 at bc7bd79 (its diagnose.json): no effect, AR(1) noise of 6 A over 1 s; a kiln
+    # unbalance added at dBIC -293.8, whitened +5.2, held-out +21.3 % at 3.0 standard errors, fit 97.7 %.  The
+    # held-out z had silenced the weak-evidence caution; where the model with the effect still misses much
+    # (80 %), the whitened BIC is no test and the z keeps it silent
+    from kilnctl.measure.diagnose import CandidateResult
+
+    m, _ = make_record((), seed=0, t_end=4.0)
+    for fit, said in ((97.7, True), (80.0, False)):
+        d = _selected("second_motor", 5.2)
+        d.rounds_[0][0] = CandidateResult("second_motor", -293.8, 21.3, {"current_A": fit}, {}, {}, [], [], True,
+                                          "", 0.0, delta_bic_corrected=5.2, holdout_z=3.0)
+        texts = effect_cautions(d, m, _exp(), SETUP)
+        assert any(t.startswith("second_motor: the evidence is weak") and "+5.2" in t for t in texts) == said
