@@ -117,6 +117,11 @@ def test_a_falling_friction_the_record_cannot_tell_from_a_constant_one_is_cautio
         moved = SimpleNamespace(**dict(vars(ev), delta_bic=dbic, calibration=SimpleNamespace(values_=values)))
         tried = SimpleNamespace(**dict(vars(fitted), form_results_=[[FRICTION, "falling", moved, False, ()]]))
         assert bool(form_rival_texts(tried, FRICTION)) == said, (dbic, a_cm, m_v)
+    # an effect selected after the friction is named as a possible part of its story (red team 14's F4: a
+    # second motor after a friction that falls only above half speed)
+    after = SimpleNamespace(**dict(vars(fitted), selected_=[FRICTION, "second_motor"]))
+    (text,) = form_rival_texts(after, FRICTION)
+    assert "second_motor, added after it, may stand in for the rest of that story" in text
     # kept in its falling form, or with nothing tried, there is nothing to say
     assert form_rival_texts(SimpleNamespace(**dict(vars(fitted), forms_={FRICTION: "falling"})), FRICTION) == []
     assert form_rival_texts(SimpleNamespace(**dict(vars(fitted), form_results_=[])), FRICTION) == []
