@@ -399,7 +399,7 @@ def form_rival_texts(d, effect: str) -> list[str]:
             continue
         # the effects added after it may be the rest of the form's story (red team 14's F4, B2: a friction
         # flat to half speed and falling after, taken as a constant one, then a second motor for the ramp)
-        later = d.selected_[d.selected_.index(effect) + 1:] if effect in d.selected_ else []
+        later = d.selected_[d.selected_.index(effect) + 1:]
         rest = (f" {listed(later)}, added after it, may stand in for the rest of that story: select again "
                 f"without {'it' if len(later) == 1 else 'them'} (--candidates) to see.") if later else ""
         out.append(f"{effect}: in its {form.name} form it fits this record about as well ({story}; dBIC "

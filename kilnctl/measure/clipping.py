@@ -16,6 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .logger import speed_step
 from .stats import robust_sigma
 
 __all__ = ["ClipLevel", "clipped_levels", "clipped_notes", "unclipped", "residual", "CLIP_MIN_SAMPLES", "CLIP_RATIO", "NOISE_REL",
@@ -121,8 +122,6 @@ def clipped_levels(arrays, i_max: float | None = None, set_speeds=()) -> list[Cl
 def _holds_set_speed(speed, level: float, set_speeds) -> bool:
     """True when a speed level lies within :data:`DRIVE_LIMIT_TOL` of a set speed, or within one of the
     speed's logged steps."""
-    from .logger import speed_step
-
     step = None
     for w in set_speeds:
         if w is None or not np.isfinite(w) or w == 0:

@@ -1232,12 +1232,12 @@ def _check_units(arrays, lines, source, params, row_word, labels=None, log=False
             pct = "" if abs(top / rad - 1.0) < 0.15 else (
                 f"; it is {100 * top / rad:.0f} % of that, so it may instead be per cent of a rated speed: then "
                 "convert it to rpm yourself")
+            col = _column_base(labels, name)
             raise DataError(
                 f"{at}: largest value {top:.4g} looks like rad/s, not rpm (the setup's speed reference {w_ref:g} rpm "
                 f"is {rad:.4g} rad/s); multiply by 60/(2*pi) = 9.549, or write the unit in the header "
-                f"('{_column_base(labels, name)} [rad/s]')"
-                + (f" or the mapping (--columns '{name}={_column_base(labels, name)} [rad/s]')"
-                   if _column_base(labels, name) != name else "") + pct)
+                f"('{col} [rad/s]')" + (f" or the mapping (--columns '{name}={col} [rad/s]')" if col != name else "")
+                + pct)
         if not log and top > TOO_LARGE * w_ref > 0:
             glitch = _glitches(a, TOO_LARGE * w_ref, source, lines, row_word, labels, name, "rpm")
             if glitch:
