@@ -95,6 +95,22 @@ def test_whitening_filter_turns_coloured_noise_white():
     assert noise_filter(rng.standard_normal(n)).size == 0  # white noise needs no filter
 
 
+def test_a_fit_that_improves_on_its_start_does_not_say_it_kept_it():
+    # truth: the cost at the given values themselves (n_local=0, the test below checks it against a direct run):
+    # a local fit from 10 % off the record's mu_c ends below it, and kept_start_ says so; from the values it
+    # ended at, asked for no fit, the start is kept
+    from kilnctl.measure.calibrate import Calibration
+    from kilnctl.measure.synthetic import DEFAULT_GAINS, make_record
+
+    setup = resolve_gains(Parameters(DEFAULT_GAINS))
+    m, _ = make_record((), seed=5, t_end=12.0)
+    given = {"mu_c": 0.9 * setup.mu_c, "m_v": setup.m_v}
+    at_start = Calibration(setup, ("mu_c", "m_v")).fit(m, init=given, starts=[], n_local=0)
+    fitted = Calibration(setup, ("mu_c", "m_v")).fit(m, init=given, starts=[], n_local=1)
+    assert fitted.cost_ < at_start.cost_ and not fitted.kept_start_
+    assert len(fitted.local_fits_) == 1 and fitted.local_fits_[0]["start"] == pytest.approx(given)
+
+
 def test_no_local_fit_judges_the_structure_at_the_given_values():
     # truth: the model run directly at the given values (run_model), its squared error summed by hand over the
     # samples from the start of the experiment; n_local=0 asks for no fit, so nothing may move
@@ -106,7 +122,7 @@ def test_no_local_fit_judges_the_structure_at_the_given_values():
     given = {"mu_c": 0.9 * setup.mu_c, "mu_s": 1.1 * setup.mu_s, "m_v": setup.m_v, "J_v": 1.2 * setup.J_v}
     cal = Calibration(setup, ("mu_c", "mu_s", "m_v", "J_v")).fit(m, init=given, starts=[], n_local=0)
     assert cal.values_ == pytest.approx(given, rel=1e-12)
-    assert cal.local_fits_ == []
+    assert cal.local_fits_ == [] and cal.kept_start_
     exp = m.experiment(setup)
     run = run_model(setup.replace(**given), m, exp)
     active = m.t >= exp.t0 - 1e-9

@@ -877,6 +877,9 @@ class Calibration:
         The experiment simulated.
     message_ : str
         Optimizer status.
+    kept_start_ : bool
+        True when no local fit ended below the starting values' cost and
+        those values were kept.
     outside_ : dict or None
         The fitted ``outside`` term (its ``fit``), or None.
     """
@@ -1074,6 +1077,7 @@ class Calibration:
         self.n_starts_ = len(u0s)
         self.nfev_ = search.nfev
         self.message_ = str(best_fit.message)
+        self.kept_start_ = best_fit.jac is None
         self._set_statistics(space, prob, free, params, best, u, J)
         self.experiment_ = exp
         self.scales_ = scales
