@@ -134,7 +134,8 @@ def test_no_local_fit_judges_the_structure_at_the_given_values():
 @pytest.mark.parametrize("B_o, on_bound", [(6e5, False), (0.0, True)])
 def test_a_value_many_standard_errors_from_a_bound_is_not_on_it(B_o, on_bound):
     # truth by construction: kilnctl's generator with a viscous drag of 6e5 N*m*s/rad (red team 9's R02: 0.06 %
-    # of the 0-1e9 range, within the old 1e-3 band, tens of standard errors above 0), and without one (the fit
+    # of the 0-1e9 range, within the old 1e-3 band, about three standard errors above 0 once they allow for the
+    # coloured noise: 2.3e5 here, 2.1e5 the spread over seeds, see the test below), and without one (the fit
     # ends at the bound 0)
     from kilnctl.measure.calibrate import Calibration
     from kilnctl.measure.effects import CATALOGUE
@@ -149,4 +150,26 @@ def test_a_value_many_standard_errors_from_a_bound_is_not_on_it(B_o, on_bound):
         assert "B_o" in cal.on_bound_
     else:
         assert cal.values_["B_o"] == pytest.approx(B_o, rel=0.2)
-        assert cal.values_["B_o"] > 5 * cal.stderr_["B_o"] and "B_o" not in cal.on_bound_
+        assert cal.values_["B_o"] > 2 * cal.stderr_["B_o"] and "B_o" not in cal.on_bound_
+
+
+@pytest.mark.slow
+def test_standard_errors_under_coloured_noise_match_the_spread_over_records():
+    # truth: the spread of the fitted drag over twelve records of kilnctl's generator that differ only in the
+    # noise's seed (white 4 A plus AR(1) 4 A of 0.4 s on the current): standard deviation 2.1e5 N*m*s/rad when
+    # the sandwich covariance came in, mean reported standard error 2.4e5 (the usual s^2 (J^T J)^-1 had given
+    # about 2e4: the drag's score is slow, where the coloured noise has most of its power)
+    from kilnctl.measure.calibrate import Calibration
+    from kilnctl.measure.effects import CATALOGUE
+    from kilnctl.measure.synthetic import DEFAULT_GAINS, make_record
+
+    setup = resolve_gains(Parameters(DEFAULT_GAINS))
+    values, errors = [], []
+    for seed in range(7, 19):
+        m, _ = make_record(("viscous_drag",), seed=seed, t_end=20.0, magnitudes={"B_o": 6e5})
+        free = ["mu_c", "m_v", *CATALOGUE["viscous_drag"].parameters]
+        cal = Calibration(setup, free, effects=("viscous_drag",)).fit(m, init={"B_o": 3e5}, n_local=1)
+        values.append(cal.values_["B_o"])
+        errors.append(cal.stderr_["B_o"])
+    ratio = float(np.mean(errors) / np.std(values, ddof=1))
+    assert 0.6 < ratio < 1.6, ratio

@@ -92,13 +92,13 @@ def test_bic_by_hand():
 
 
 def test_covariance_of_a_linear_fit():
-    # truth: ordinary least squares, cov = s^2 (X^T X)^-1
+    # truth: ordinary least squares, cov = s^2 (X^T X)^-1, the sandwich with the meat of white noise s^2 X^T X
     rng = np.random.default_rng(5)
     X = rng.standard_normal((200, 3))
-    cov, singular = _covariance(X, 0.25, np.eye(3))
+    cov, singular = _covariance(X, 0.25 * X.T @ X, np.eye(3))
     assert np.allclose(cov, 0.25 * np.linalg.inv(X.T @ X)) and not singular.any()
     X[:, 2] = X[:, 1]  # two identical columns: not identifiable
-    _, singular = _covariance(X, 0.25, np.eye(3))
+    _, singular = _covariance(X, 0.25 * X.T @ X, np.eye(3))
     assert singular[1] and singular[2] and not singular[0]
 
 

@@ -33,6 +33,7 @@ from .breakaways import BreakawayTiming
 from .effects import DEFAULT_CALIBRATE, FreeParameter, free_parameter
 from .io import Experiment, Measurement
 from .runner import CHANNELS, ModelRun, run_model
+from .evidence import score_covariance
 from .stats import fit_percent
 
 __all__ = ["Calibration", "Starts", "Horizons", "Smoothing", "default_starts", "holdout_masks", "bic", "sweep", "unspiked"]
@@ -1092,7 +1093,12 @@ class Calibration:
         r = prob.residual(best.run)
         m_res, p = r.size, u.size
         s2 = float(r @ r) / max(m_res - p, 1)
-        cov_phys, singular = _covariance(J, s2, space.jacobian(u) if p else np.zeros((0, 0)))
+        # the standard errors allow for the residual's autocorrelation (the sandwich covariance): coloured noise
+        # and a structure's own misfit leave a residual correlated over seconds, where s^2 (J^T J)^-1 understated
+        # the spread ten-fold (red team 15's small drag: 3.79e5 +- 2.5e3 N*m*s for the plant's 5e5)
+        meat = (score_covariance(J, r, len(CHANNELS), p) if p and J.shape[0] == m_res and m_res >= 8 * len(CHANNELS)
+                else s2 * (J.T @ J) if p else None)
+        cov_phys, singular = _covariance(J, meat, space.jacobian(u) if p else np.zeros((0, 0)))
         se = np.sqrt(np.clip(np.diag(cov_phys), 0, None)) if p else np.zeros(0)
         se = np.where(singular, np.inf, se) if p else se
         self.stderr_ = {k: float(v) for k, v in zip(self.names_, se)}
@@ -1113,7 +1119,7 @@ class Calibration:
             # not stop there (red team 9: B_o 6.08e5 of 0-1e9, 18 standard errors above 0, read as "the fit
             # wanted to go further"): on the bound is within two standard errors (in the optimizer's scaling, by
             # the same covariance rule as the reported errors; a coordinate on a singular direction stays on it)
-            cov_u, singular_u = _covariance(J, s2, np.eye(p))
+            cov_u, singular_u = _covariance(J, meat, np.eye(p))
             se_u = np.where(singular_u, np.inf, np.sqrt(np.clip(np.diag(cov_u), 0.0, None)))
             gap = np.minimum(u - space.lower, space.upper - u)
             near &= ~(np.isfinite(se_u) & (gap > 2.0 * se_u))
@@ -1311,8 +1317,10 @@ def _autocov(x, w, k_lo, k_hi) -> np.ndarray:
     return num / np.maximum(np.round(den), 1.0)
 
 
-def _covariance(J, s2, G):
-    """Covariance of the reported values: G (J^T J)^-1 G^T s2, with singular directions flagged."""
+def _covariance(J, meat, G):
+    """Covariance of the reported values: G (J^T J)^-1 S (J^T J)^-1 G^T (the sandwich; S = s^2 J^T J for white
+    residuals gives G (J^T J)^-1 G^T s^2), the inverse taken on the non-singular directions of J^T J, which are
+    flagged."""
     p = J.shape[1] if J.ndim == 2 else 0
     if p == 0:
         return np.zeros((0, 0)), np.zeros(0, bool)
@@ -1321,7 +1329,7 @@ def _covariance(J, s2, G):
     tol = max(w.max(), 1e-300) * 1e-10
     bad = w <= tol
     inv = (V[:, ~bad] / w[~bad]) @ V[:, ~bad].T
-    cov_u = inv * s2
+    cov_u = inv @ meat @ inv
     cov = G @ cov_u @ G.T
     # a reported value that loads noticeably (> 5 %) on a singular direction is not identifiable
     if bad.any():

@@ -26,7 +26,7 @@ from .stats import fit_percent
 if TYPE_CHECKING:
     from .calibrate import Calibration
 
-__all__ = ["variance_inflation", "noise_filter", "whiten", "holdout_z", "whitened_delta_bic", "CandidateResult",
+__all__ = ["variance_inflation", "score_covariance", "noise_filter", "whiten", "holdout_z", "whitened_delta_bic", "CandidateResult",
            "close_rival", "judge"]
 
 
@@ -57,6 +57,90 @@ def variance_inflation(e, max_lag: int | None = None) -> float:
     neg = np.nonzero(r <= 0)[0]
     r = r[: neg[0]] if neg.size else r
     return float(max(1.0, 1.0 + 2.0 * r.sum()))
+
+
+def correlation_length(e, max_lag: int | None = None) -> int:
+    """The first lag at which the autocorrelation of ``e`` is no longer positive [samples] (Geyer's initial
+    positive sequence, as :func:`variance_inflation` sums it); 1 for white noise, ``max_lag`` (default N/4)
+    when it stays positive."""
+    from .stats import autocorr
+
+    e = np.asarray(e, float)
+    L = max(1, min(e.size // 4, max_lag or e.size // 4))
+    if e.size < 4:
+        return 1
+    r = autocorr(e - e.mean(), L)["r"][1:]
+    neg = np.nonzero(r <= 0)[0]
+    return int(neg[0] + 1) if neg.size else L
+
+
+PREWHITEN_CAP = 0.99
+"""Largest singular value of the first-order autoregression that prewhitens the scores (:func:`score_covariance`;
+Andrews and Monahan take 0.97: AR(1) noise of a second at 50 Hz has 0.98)."""
+
+
+def _lagged_sum(G, L: int) -> np.ndarray:
+    """Gamma_0 + sum_(l=1..L) (1 - l/(L+1)) (Gamma_l + Gamma_l^T), Gamma_l = sum_t g_t g_(t-l)^T (every lag at
+    once through the FFT, zero-padded: no wrap-around)."""
+    n, p = G.shape
+    nfft = 1 << int(math.ceil(math.log2(2 * n)))
+    F = np.fft.rfft(G, nfft, axis=0)
+    w = np.concatenate([[0.5], 1.0 - np.arange(1, L + 1) / (L + 1.0)])  # lag 0 counted once, below twice
+    S = np.empty((p, p))
+    for i in range(p):  # pair by pair: memory of one series, whatever the record's length
+        for j in range(i, p):
+            c = np.fft.irfft(F[:, i] * np.conj(F[:, j]), nfft)  # c[l] = sum_t G[t+l,i] G[t,j], c[-l] the other way
+            g = w @ c[:L + 1] + w @ np.concatenate([[c[0]], c[:-L - 1:-1]])
+            S[i, j] = S[j, i] = g
+    return S
+
+
+def score_covariance(J, r, n_channels: int = 1, n_params: int | None = None) -> np.ndarray:
+    """Long-run covariance of the least-squares score J^T r when the residual is autocorrelated.
+
+    The "meat" S of the sandwich covariance of nonlinear least squares, (J^T J)^-1 S (J^T J)^-1, estimated as
+    Andrews and Monahan (1992) do: the scores g_t (of the samples at time t, summed over the channels so that
+    their cross-correlation counts) are prewhitened by a first-order vector autoregression g_t = A g_(t-1) + u_t
+    (its singular values capped at :data:`PREWHITEN_CAP`), the long-run covariance of u is the Newey-West sum
+    with Bartlett weights up to twice the longest :func:`correlation_length` of its columns (at most N/4), and
+    S = (I - A)^-1 S_u (I - A)^-T.  For white noise S is about s^2 J^T J, the usual covariance s^2 (J^T J)^-1;
+    for noise correlated over many samples the usual one understates the spread of the estimates by up to the
+    square root of :func:`variance_inflation`.  On a linear fit under AR(1) noise (2000 samples, 300 records)
+    the standard errors from S are 0.90-0.97 of the estimates' spread for white noise, 0.98-1.01 for a
+    coefficient of 0.9 and 0.85-0.93 for 0.98 (the usual ones: 0.15 for 0.95); without the prewhitening 0.66-0.70
+    for 0.98 (tests/test_measure_evidence.py checks 0.9).
+
+    Parameters
+    ----------
+    J : ndarray, shape (n_channels * N, p)
+        Jacobian of the residual, the channels stacked in blocks of N samples.
+    r : ndarray, shape (n_channels * N,)
+        Residual, stacked the same way.
+    n_channels : int, default 1
+        Channels (blocks of rows); rows of a block are consecutive samples.
+    n_params : int, optional
+        Parameters for the degrees-of-freedom factor m / (m - p) (default p).
+
+    Returns
+    -------
+    ndarray, shape (p, p)
+        S, in the units of J^T J times those of r squared.
+    """
+    J = np.asarray(J, float)
+    r = np.asarray(r, float)
+    m, p = J.shape
+    n = m // n_channels
+    G = sum(J[i * n:(i + 1) * n] * r[i * n:(i + 1) * n, None] for i in range(n_channels))
+    A = np.linalg.lstsq(G[:-1], G[1:], rcond=None)[0].T
+    U, sv, Vt = np.linalg.svd(A)
+    A = (U * np.minimum(sv, PREWHITEN_CAP)) @ Vt
+    u = G[1:] - G[:-1] @ A.T
+    lag = max(correlation_length(u[:, j]) for j in range(p)) if np.any(u) else 1
+    S_u = _lagged_sum(u, int(min(max(u.shape[0] // 4, 1), 2 * lag)))
+    B = np.linalg.inv(np.eye(p) - A)
+    S = B @ S_u @ B.T
+    k = p if n_params is None else n_params
+    return 0.5 * (S + S.T) * m / max(m - k, 1)
 
 
 def noise_filter(e, max_order: int = 25) -> np.ndarray:
