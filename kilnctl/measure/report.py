@@ -994,7 +994,10 @@ HOW_TO_READ = {
                              "effect's period, a strongly autocorrelated residual, evidence just past the "
                              "threshold, another effect or another form of it that explains the record about as "
                              "well). Read them before acting."),
-    "uncertainty": ("± values", "One standard error of a fitted value from the fit's curvature. \"not "
+    "uncertainty": ("± values", "One standard error of a fitted value, from the fit's curvature and the "
+                                "residual's correlation in time (slow noise pins a value down less than white "
+                                "noise of the same size). It covers the noise, not a bias: an effect in another "
+                                "form than the model's can leave a value several standard errors off. \"not "
                                 "identifiable\" means the record does not pin the value down: other values fit "
                                 "as well."),
     "linear": ("linear vs nonlinear", "The design is linear (eq. 21, no load torque, stick or slip inertia); the "
