@@ -31,9 +31,9 @@ from ..params import Parameters
 from ..simulate import resolve_gains
 from .breakaways import BreakawayTiming
 from .effects import DEFAULT_CALIBRATE, FreeParameter, free_parameter
+from .evidence import score_covariance
 from .io import Experiment, Measurement
 from .runner import CHANNELS, ModelRun, run_model
-from .evidence import score_covariance
 from .stats import fit_percent
 
 __all__ = ["Calibration", "Starts", "Horizons", "Smoothing", "default_starts", "holdout_masks", "bic", "sweep", "unspiked"]
@@ -1095,7 +1095,7 @@ class Calibration:
         s2 = float(r @ r) / max(m_res - p, 1)
         # the standard errors allow for the residual's autocorrelation (the sandwich covariance): coloured noise
         # and a structure's own misfit leave a residual correlated over seconds, where s^2 (J^T J)^-1 understated
-        # the spread ten-fold (red team 15's small drag: 3.79e5 +- 2.5e3 N*m*s for the plant's 5e5)
+        # the spread ten-fold (a drag under the generator's coloured noise, tests/test_measure_calibrate.py)
         meat = (score_covariance(J, r, len(CHANNELS), p) if p and J.shape[0] == m_res and m_res >= 8 * len(CHANNELS)
                 else s2 * (J.T @ J) if p else None)
         cov_phys, singular = _covariance(J, meat, space.jacobian(u) if p else np.zeros((0, 0)))

@@ -26,8 +26,8 @@ from .stats import fit_percent
 if TYPE_CHECKING:
     from .calibrate import Calibration
 
-__all__ = ["variance_inflation", "score_covariance", "noise_filter", "whiten", "holdout_z", "whitened_delta_bic", "CandidateResult",
-           "close_rival", "judge"]
+__all__ = ["variance_inflation", "correlation_length", "score_covariance", "noise_filter", "whiten", "holdout_z",
+           "whitened_delta_bic", "CandidateResult", "close_rival", "judge"]
 
 
 def variance_inflation(e, max_lag: int | None = None) -> float:
@@ -108,7 +108,7 @@ def score_covariance(J, r, n_channels: int = 1, n_params: int | None = None) -> 
     square root of :func:`variance_inflation`.  On a linear fit under AR(1) noise (2000 samples, 300 records)
     the standard errors from S are 0.90-0.97 of the estimates' spread for white noise, 0.98-1.01 for a
     coefficient of 0.9 and 0.85-0.93 for 0.98 (the usual ones: 0.15 for 0.95); without the prewhitening 0.66-0.70
-    for 0.98 (tests/test_measure_evidence.py checks 0.9).
+    for 0.98 (tests/test_score_covariance.py checks white noise and 0.9).
 
     Parameters
     ----------
