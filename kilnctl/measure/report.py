@@ -988,8 +988,7 @@ HOW_TO_READ = {
                                  "less than {holdout_z:g} standard errors. Where the model already fits closely, "
                                  "a small gain must also be borne out: by the whitened dBIC, or by more than "
                                  "{holdout_z:g} standard errors; and no gain counts when the whitened dBIC rises "
-                                 "by more than {min_delta_bic:g} (slow noise links the held-out blocks to their "
-                                 "neighbours). An effect is <b>supported</b> only when it passes both tests."),
+                                 "(slow noise links the held-out blocks to their neighbours). An effect is <b>supported</b> only when it passes both tests."),
     "cautions": ("cautions", "Where the evidence is weaker than the numbers suggest (a record shorter than the "
                              "effect's period, a strongly autocorrelated residual, evidence just past the "
                              "threshold, another effect or another form of it that explains the record about as "
