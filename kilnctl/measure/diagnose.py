@@ -1388,13 +1388,14 @@ class Diagnosis:
                 f"{'supported' if r.supported else '-'}")
         return results
 
-    def _evidence(self, m, name, cal, current, scales, train, test, exp, wall_s) -> CandidateResult:
+    def _evidence(self, m, name, cal, current, scales, train, test, exp, wall_s,
+                  slow_change: bool = False) -> CandidateResult:
         """Judge a refitted candidate against the current model (:func:`~kilnctl.measure.evidence.judge`) with
         this diagnosis' thresholds; the hunting rule applies when the current model's cycle runs in step with
-        the record's."""
+        the record's; ``slow_change``: a change outside the catalogue."""
         r = judge(m, name, cal, current, scales, train, test, exp, wall_s, min_delta_bic=self.min_delta_bic,
                   min_holdout_gain=self.min_holdout_gain, min_holdout_z=self.holdout_z,
-                  hunting=self._cycle_in_phase(m, current, exp))
+                  hunting=self._cycle_in_phase(m, current, exp), slow_change=slow_change)
         r.form = getattr(cal, "form_", None)  # a refit in another form of the effect (see _in_best_form)
         return r
 
@@ -1462,7 +1463,8 @@ class Diagnosis:
             if cal.outside_ is None:
                 continue
             label = "abrupt change" if term.kind == "step" else "slow drift"
-            r = self._evidence(m, label, cal, current, scales, train, test, exp, time.perf_counter() - t_start)
+            r = self._evidence(m, label, cal, current, scales, train, test, exp, time.perf_counter() - t_start,
+                               slow_change=True)
             # a change outside the catalogue is the stronger claim (no effect of it explains the record): it wins
             # when it is better by every test a candidate is judged with.  By BIC alone a step at 25 s beat a
             # true kiln unbalance at 100 Hz (dBIC -602 against -584; whitened -31 against -10), which predicts
