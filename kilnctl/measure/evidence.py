@@ -49,29 +49,29 @@ def variance_inflation(e, max_lag: int | None = None) -> float:
     float
         >= 1.
     """
+    return float(max(1.0, 1.0 + 2.0 * _initial_positive(e, max_lag).sum()))
+
+
+def _initial_positive(e, max_lag: int | None = None) -> np.ndarray:
+    """Autocorrelation of ``e`` at lags 1, 2, ... up to the first that is no longer positive (excluded), at most
+    ``max_lag`` (default N/4) lags: Geyer's initial positive sequence."""
     from .stats import autocorr
 
     e = np.asarray(e, float)
     L = max(1, min(e.size // 4, max_lag or e.size // 4))
     r = autocorr(e - e.mean(), L)["r"][1:]
     neg = np.nonzero(r <= 0)[0]
-    r = r[: neg[0]] if neg.size else r
-    return float(max(1.0, 1.0 + 2.0 * r.sum()))
+    return r[: neg[0]] if neg.size else r
 
 
 def correlation_length(e, max_lag: int | None = None) -> int:
     """The first lag at which the autocorrelation of ``e`` is no longer positive [samples] (Geyer's initial
     positive sequence, as :func:`variance_inflation` sums it); 1 for white noise, ``max_lag`` (default N/4)
     when it stays positive."""
-    from .stats import autocorr
-
-    e = np.asarray(e, float)
-    L = max(1, min(e.size // 4, max_lag or e.size // 4))
-    if e.size < 4:
+    if np.size(e) < 4:
         return 1
-    r = autocorr(e - e.mean(), L)["r"][1:]
-    neg = np.nonzero(r <= 0)[0]
-    return int(neg[0] + 1) if neg.size else L
+    L = max(1, min(np.size(e) // 4, max_lag or np.size(e) // 4))
+    return min(int(_initial_positive(e, max_lag).size) + 1, L)
 
 
 PREWHITEN_CAP = 0.99
