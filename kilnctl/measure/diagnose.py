@@ -198,10 +198,14 @@ class Diagnosis:
     forms_ : dict
         {selected effect: the name of the :class:`~kilnctl.model.catalogue.Form` it is fitted in}, for the
         effects added in another form (see :meth:`_in_best_form`).
-    form_results_ : list of [str, str, CandidateResult, bool, tuple]
+    stick_slip_ : bool
+        The final structure has self-sustained stick-slip cycles (the torque friction law): its cost is
+        rugged, and each refit stops in one of many nearby valleys.
+    form_results_ : list of [str, str, CandidateResult, bool, tuple, dict]
         Every form tried (see :meth:`_in_best_form`): the effect, the form's name, its evidence against the
         effect in its own form, whether the candidate was then judged in it (the supported form of lowest
-        BIC), and the effects of the model it was a candidate for.
+        BIC), the effects of the model it was a candidate for, and the values the effect's own form was
+        fitted to there.
     checks_ : list of (str, CandidateResult)
         Every judgement of a selected effect in the backward check (``"backward"``, on the fitting part) and
         the final check (``"final"``, on the whole record): the check and the effect's evidence, keeping it
@@ -585,6 +589,7 @@ class Diagnosis:
                                                      pool)
         self.swaps_ = {k: v for k, v in self.swaps_.items() if k in selected}
         self.forms_ = {e: f for e, f in self._forms.items() if e in selected}
+        self.stick_slip_ = self._rugged(tuple(selected))
         self.removed_ = list(self.removed_) + dropped
         self.final_search_["then_removed"] = [r.effect for r in dropped]
         self.base_calibration_ = base
@@ -727,7 +732,7 @@ class Diagnosis:
                 ev.reason = (f"not this form: its {', '.join(pinned)} ended at a bound "
                              f"({', '.join(f'{k} = {cal.values_[k]:.3g}' for k in pinned)}), so it stands in for "
                              f"another difference ({ev.reason})")
-            entry = [r.effect, form.name, ev, False, tuple(selected)]
+            entry = [r.effect, form.name, ev, False, tuple(selected), dict(r.calibration.values_)]
             self.form_results_.append(entry)
             say(f"  {r.effect} as {form.name}: dBIC {ev.delta_bic:+10.1f} (whitened {ev.delta_bic_corrected:+8.1f})"
                 f"  held-out gain {ev.holdout_gain:+6.1f} % (z {ev.holdout_z:+5.1f})  against its own form  "

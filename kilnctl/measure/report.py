@@ -428,9 +428,9 @@ def form_verdicts(d) -> list[tuple]:
         its last refit, the one the round used.
     """
     entries = list(getattr(d, "form_results_", None) or [])
-    key = [(e, f, tuple(against)) for e, f, _, _, against in entries]
+    key = [(e[0], e[1], tuple(e[4])) for e in entries]
     out = []
-    for i, (e, f, r, chosen, against) in enumerate(entries):
+    for i, (e, f, r, chosen, against) in enumerate(x[:5] for x in entries):
         n = key.count(key[i])
         if key[i] in key[i + 1:]:
             continue  # refitted again later against the same model: that refit is the one the round used
