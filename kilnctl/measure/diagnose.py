@@ -1250,7 +1250,7 @@ class Diagnosis:
                 cal = matched
         if rugged and cal.kept_start_:
             cal = self._restart_at_effect(m, params, effects, eff, init, cal, scales, train, exp, first_failure)
-        if rugged:
+        if rugged and eff.steady_load:
             cal = self._restart_at_load(m, params, effects, eff, (model, comps, p), init, cal, scales, train, exp,
                                         first_failure)
         return cal, None, time.perf_counter() - t_start
@@ -1270,7 +1270,10 @@ class Diagnosis:
         with the burden so moved (the current's mean after the ramp, per tonne of burden, from one more run);
         the one of lowest cost on the ramp is fitted once (ranked on the whole record, a start with a drag of
         7.5e5 and its cycles by chance in phase came first, and its fit ended 12 % above the model without
-        the drag).  Starts that move the burden by less than 1 % are not tried."""
+        the drag).  Starts that move the burden by less than 1 % are not tried.  Only for an effect that loads
+        the drive at the set speed (:attr:`Effect.steady_load`): a kiln unbalance so restarted (its mean over
+        part of a turn moves the current too) took the drag's place on the benchmark's torque law + drag
+        records."""
         model, comps, p = built
         if "m_v" not in init or exp.steady_from is None:
             return cal

@@ -254,6 +254,12 @@ class Effect:
         the local fits (:class:`~kilnctl.measure.calibrate.Starts`): where it
         sets a mode's frequency, a start a few per cent off ranks below no
         mode at all, and the base values may have made up for the effect.
+    steady_load : bool
+        The effect loads the drive at the set speed (a viscous drag, a
+        friction): a model without it makes up for it by a heavier burden,
+        and a refit under stick-slip is also started with the burden moved
+        to keep the current at the set speed (see
+        :meth:`~kilnctl.measure.diagnose.Diagnosis._restart_at_load`).
     null : dict or None
         Values of its parameters at which the effect vanishes (or nearly:
         a lag of 0.1 ms), so that the structure with it contains the one
@@ -284,6 +290,7 @@ class Effect:
     spread: str | None = None
     forms: tuple = ()
     scale: Callable | None = field(repr=False, default=None)
+    steady_load: bool = False
 
     def usual(self, name: str, params: Parameters | None = None) -> tuple[float, float]:
         """The usual range of parameter ``name`` [its unit] for the drive of ``params`` (Table 1's without).

@@ -279,7 +279,7 @@ class ViscousDrag(Component):
             "current above the model in proportion to the speed: growing along the ramp, then a constant "
             "offset at steady speed (which alone a burden mass or friction change could also explain)",
             starts=lambda params, m: [{"B_o": 1e5}, {"B_o": 3e6}],
-            plausible={"B_o": (2e6, 1e7)}, null={"B_o": 0.0}, scale=drag_scale),
+            plausible={"B_o": (2e6, 1e7)}, null={"B_o": 0.0}, scale=drag_scale, steady_load=True),
     )
     requires = ("kiln",)
 
