@@ -1257,8 +1257,8 @@ class Diagnosis:
 
     def _restart_at_load(self, m, params, effects, eff, built, init, cal, scales, train, exp, first_failure):
         """``cal`` (a refit of a stick-slip structure), or one more local fit that does better: from the effect's
-        own start (:attr:`Effect.starts` and its usual range) that fits the record best once the burden's mass
-        is moved to keep the model's current at the set speed where it was.
+        own start (:attr:`Effect.starts` and its usual range) that fits the ramp best once the burden's mass is
+        moved to keep the model's current at the set speed where it was.
 
         An effect that loads the drive at the set speed (a viscous drag, a friction) is made up for, in the
         model without it, by a heavier burden; the structure with the effect lies along a valley where the
