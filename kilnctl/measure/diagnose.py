@@ -1323,16 +1323,7 @@ class Diagnosis:
                 best = (cost(r), start)
         if best is None:
             return cal
-        try:
-            again = self._calibrate(m, params, effects, scales, train, best[1], (), experiment=exp,
-                                    first_failure=first_failure, n_local=1)
-        except KilnctlError:
-            return cal
-        if again.cost_ >= cal.cost_:
-            return cal
-        again.n_starts_ += cal.n_starts_
-        again.local_fits_ = list(cal.local_fits_) + list(again.local_fits_)
-        return again
+        return self._one_more_fit(m, params, effects, scales, train, exp, first_failure, best[1], cal)
 
     def _restart_at_effect(self, m, params, effects, eff, init, cal, scales, train, exp, first_failure):
         """``cal`` (a refit of a stick-slip structure that kept its starting values ``init``), or one more
@@ -1353,14 +1344,18 @@ class Diagnosis:
         found = {k: v for k, v in best["end"].items() if k in names}
         if not found or all(abs(v - init.get(k, v)) <= 1e-9 * max(abs(v), 1.0) for k, v in found.items()):
             return cal
+        return self._one_more_fit(m, params, effects, scales, train, exp, first_failure, dict(init, **found), cal)
+
+    def _one_more_fit(self, m, params, effects, scales, train, exp, first_failure, start, cal):
+        """One local fit of base + ``effects`` from ``start``, or ``cal`` when that fails or does not end
+        lower; the starts and local fits reported by the one returned count both searches."""
         try:
-            again = self._calibrate(m, params, effects, scales, train, dict(init, **found), (), experiment=exp,
+            again = self._calibrate(m, params, effects, scales, train, start, (), experiment=exp,
                                     first_failure=first_failure, n_local=1)
         except KilnctlError:
             return cal
         if again.cost_ >= cal.cost_:
             return cal
-        # the starts and local fits reported are the refit's too
         again.n_starts_ += cal.n_starts_
         again.local_fits_ = list(cal.local_fits_) + list(again.local_fits_)
         return again
