@@ -440,7 +440,7 @@ def form_kept_texts(d, effect: str) -> list[str]:
     if form_name is None or not getattr(d, "stick_slip_", False):
         return []
     kept = [e for e in getattr(d, "form_results_", None) or []
-            if e[0] == effect and e[1] == form_name and e[3] and len(e) > 5]
+            if e[0] == effect and e[1] == form_name and e[3]]
     form = CATALOGUE[effect].form(form_name)
     if not kept or form is None or form.alike is None:
         return []

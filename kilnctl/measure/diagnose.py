@@ -1319,8 +1319,11 @@ class Diagnosis:
                 continue
             start = dict(init, **g, m_v=m_v)
             r = run(start)
-            if r is not None and (best is None or cost(r) < best[0]):
-                best = (cost(r), start)
+            if r is None:
+                continue
+            c = cost(r)
+            if best is None or c < best[0]:
+                best = (c, start)
         if best is None:
             return cal
         return self._one_more_fit(m, params, effects, scales, train, exp, first_failure, best[1], cal)

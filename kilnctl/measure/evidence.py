@@ -457,9 +457,9 @@ def judge(m, name, cal, current, scales, train, test, exp, wall_s, *, min_delta_
     # noise modelled must fall by more than STICK_SLIP_FALL times the threshold: every true effect accepted so
     # (held-out worse, stick-slip in the model) in the whole-set runs and red teams 8-15 had it at -128 or
     # below (a kiln unbalance -16.7 %, -128.4; a current limit -23.5 %, -3566)
-    worse_cycles = stick_slip and close and gain < 0.0 and not hunting
-    if worse_cycles:
-        ok_robust = dbic_corr < -STICK_SLIP_FALL * min_delta_bic and gain_z > -min_holdout_z
+    cycles_only = (stick_slip and close and gain < 0.0 and not hunting and ok_robust
+                   and not dbic_corr < -STICK_SLIP_FALL * min_delta_bic)
+    ok_robust = ok_robust and not cycles_only
     # ... except when the record hunts and the current model's cycle runs at its frequency: the cycle's
     # phase over the record moves with every parameter (on a 30 ms lag record a motor Coulomb friction of
     # 1 N m, a fifth of an ampere, moved the cost by a third), so a refit with any added parameter tunes it
@@ -485,7 +485,7 @@ def judge(m, name, cal, current, scales, train, test, exp, wall_s, *, min_delta_
         reason = (f"BIC improves and the held-out part is predicted slightly better ({why}), but neither bears "
                   f"it out: BIC with the coloured noise modelled rises ({dbic_corr:+.1f}) and the held-out gain is "
                   f"within {min_holdout_z:g} standard errors of none: likely the record's slowly correlated noise")
-    elif ok_bic and worse_cycles and not ok_robust and dbic_corr < -min_delta_bic and gain_z > -min_holdout_z:
+    elif ok_bic and cycles_only:
         reason = (f"BIC improves, and BIC with the coloured noise modelled falls by {-dbic_corr:.1f}, but the "
                   f"held-out part is predicted worse ({why}) and the model's stick-slip cycles shift with any added "
                   f"parameter: with the held-out part worse the whitened BIC must fall by more than "

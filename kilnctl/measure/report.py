@@ -988,7 +988,11 @@ HOW_TO_READ = {
                                  "less than {holdout_z:g} standard errors. Where the model already fits closely, "
                                  "a small gain must also be borne out: by the whitened dBIC, or by more than "
                                  "{holdout_z:g} standard errors; and no gain counts when the whitened dBIC rises "
-                                 "(slow noise links the held-out blocks to their neighbours). An effect is <b>supported</b> only when it passes both tests."),
+                                 "(slow noise links the held-out blocks to their neighbours). Where the model has "
+                                 "stick-slip cycles, any added parameter can shift them: a candidate that predicts "
+                                 "the held-out part worse then needs the whitened dBIC to fall by "
+                                 "{stick_slip_fall:g} times {min_delta_bic:g}. An effect is <b>supported</b> only when it "
+                                 "passes both tests."),
     "cautions": ("cautions", "Where the evidence is weaker than the numbers suggest (a record shorter than the "
                              "effect's period, a strongly autocorrelated residual, evidence just past the "
                              "threshold, another effect or another form of it that explains the record about as "
@@ -1028,6 +1032,9 @@ def how_to_read(keys, **values) -> str:
     str
         HTML.
     """
+    from .evidence import STICK_SLIP_FALL
+
+    values = dict({"stick_slip_fall": STICK_SLIP_FALL}, **values)
     items = "".join(f"<dt>{esc(HOW_TO_READ[k][0])}</dt><dd>{HOW_TO_READ[k][1].format(**values)}</dd>" for k in keys)
     return f'<div class="howto"><h2>How to read this</h2><dl>{items}</dl></div>'
 
