@@ -55,7 +55,7 @@ from .breakaways import breakaways
 from .clipping import residual as clipped_residual
 from .cautions import caution_texts, effect_cautions, setup_cautions, skew_texts
 from .io import Measurement
-from .evidence import CandidateResult, close_rival, judge
+from .evidence import STICK_SLIP_FALL, CandidateResult, close_rival, judge
 from .oscillation import dominant_oscillation, matching_value
 from .outside import CurrentDrift, CurrentStep
 from .runner import CHANNELS, run_model
@@ -198,6 +198,10 @@ class Diagnosis:
     forms_ : dict
         {selected effect: the name of the :class:`~kilnctl.model.catalogue.Form` it is fitted in}, for the
         effects added in another form (see :meth:`_in_best_form`).
+    stick_slip_fall : float
+        :data:`~kilnctl.measure.evidence.STICK_SLIP_FALL` (class attribute, for the reports): in a model with
+        stick-slip that fits within noise, a candidate predicting the held-out part worse needs the whitened
+        BIC to fall by this many times ``min_delta_bic``.
     stick_slip_ : bool
         The final structure has self-sustained stick-slip cycles (the torque friction law): its cost is
         rugged, and each refit stops in one of many nearby valleys.
@@ -242,6 +246,8 @@ class Diagnosis:
     wall_s_ : float
         Run time [s].
     """
+
+    stick_slip_fall = STICK_SLIP_FALL
 
     def __init__(self, params: Parameters | None = None, calibrate=DEFAULT_CALIBRATE, candidates=None, *,
                  model: str = "macro", holdout: str = "blocks", holdout_fraction: float = 0.3,

@@ -1025,16 +1025,13 @@ def how_to_read(keys, **values) -> str:
     keys : sequence of str
         Terms of :data:`HOW_TO_READ`, in order.
     **values
-        Numbers the texts name (``min_delta_bic``, ``min_holdout_gain``, ``holdout_z``).
+        Numbers the texts name (``min_delta_bic``, ``min_holdout_gain``, ``holdout_z``, ``stick_slip_fall``).
 
     Returns
     -------
     str
         HTML.
     """
-    from .evidence import STICK_SLIP_FALL
-
-    values = dict({"stick_slip_fall": STICK_SLIP_FALL}, **values)
     items = "".join(f"<dt>{esc(HOW_TO_READ[k][0])}</dt><dd>{HOW_TO_READ[k][1].format(**values)}</dd>" for k in keys)
     return f'<div class="howto"><h2>How to read this</h2><dl>{items}</dl></div>'
 
@@ -1267,7 +1264,7 @@ def diagnosis_html(d, figs=None) -> str:
     return report_page(f"Diagnosis of {record_name_of(d.measurement_.source)}", headline, parts,
                        warnings=warnings, terms=("fit", "dbic", "heldout", "cautions", "uncertainty", "sigma"),
                        values={"min_delta_bic": d.min_delta_bic, "min_holdout_gain": d.min_holdout_gain,
-                               "holdout_z": d.holdout_z},
+                               "holdout_z": d.holdout_z, "stick_slip_fall": d.stick_slip_fall},
                        notes=[f"record: {n}" for n in getattr(d.measurement_, "notes", ())]
                        + list(d.experiment_.notes), settings=diagnosis_dict(d)["settings"],
                        meanings=_DIAGNOSIS_SETTINGS)
