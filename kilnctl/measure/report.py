@@ -991,7 +991,7 @@ HOW_TO_READ = {
                                  "(slow noise links the held-out blocks to their neighbours). Where the model has "
                                  "stick-slip cycles, any added parameter can shift them: a candidate that predicts "
                                  "the held-out part worse then needs the whitened dBIC to fall by "
-                                 "{stick_slip_fall:g} times {min_delta_bic:g}. An effect is <b>supported</b> only when it "
+                                 "more than {stick_slip_dbic:g}. An effect is <b>supported</b> only when it "
                                  "passes both tests."),
     "cautions": ("cautions", "Where the evidence is weaker than the numbers suggest (a record shorter than the "
                              "effect's period, a strongly autocorrelated residual, evidence just past the "
@@ -1025,7 +1025,7 @@ def how_to_read(keys, **values) -> str:
     keys : sequence of str
         Terms of :data:`HOW_TO_READ`, in order.
     **values
-        Numbers the texts name (``min_delta_bic``, ``min_holdout_gain``, ``holdout_z``, ``stick_slip_fall``).
+        Numbers the texts name (``min_delta_bic``, ``min_holdout_gain``, ``holdout_z``, ``stick_slip_dbic``).
 
     Returns
     -------
@@ -1264,7 +1264,7 @@ def diagnosis_html(d, figs=None) -> str:
     return report_page(f"Diagnosis of {record_name_of(d.measurement_.source)}", headline, parts,
                        warnings=warnings, terms=("fit", "dbic", "heldout", "cautions", "uncertainty", "sigma"),
                        values={"min_delta_bic": d.min_delta_bic, "min_holdout_gain": d.min_holdout_gain,
-                               "holdout_z": d.holdout_z, "stick_slip_fall": d.stick_slip_fall},
+                               "holdout_z": d.holdout_z, "stick_slip_dbic": d.stick_slip_fall * d.min_delta_bic},
                        notes=[f"record: {n}" for n in getattr(d.measurement_, "notes", ())]
                        + list(d.experiment_.notes), settings=diagnosis_dict(d)["settings"],
                        meanings=_DIAGNOSIS_SETTINGS)
