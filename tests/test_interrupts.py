@@ -76,9 +76,12 @@ def test_simulate_ctrl_c_is_one_line_and_exit_130(tmp_path):
     assert list(tmp_path.iterdir()) == []  # no CSV, no temporary file left behind
 
 
-# given gains (those the design gives for Table 1): no design in the parent, so the pool starts at once
-SPEC = ('model = "micro"\nt_end = 30.0\n[base]\ngains = "given"\nk_p = 0.08478\nk_I = 2.168\nk_D = 0.01419\n'
-        '[parameters.m_v]\nmin = 3e5\nmax = 9e5\nnum = 40\n')
+# given gains (those the design gives for Table 1): no design in the parent, so the pool starts at once.
+# Enough work that the sweep is still running when the Ctrl-C comes on an idle machine: 40 points of 30 s
+# took 0.5 s on two workers there, and the test then interrupted the writing of the finished table (these
+# 600 points of 120 s take about 8 s).
+SPEC = ('model = "micro"\nt_end = 120.0\n[base]\ngains = "given"\nk_p = 0.08478\nk_I = 2.168\nk_D = 0.01419\n'
+        '[parameters.m_v]\nmin = 3e5\nmax = 9e5\nnum = 600\n')
 
 
 def _workers(pid: int) -> list[int]:
@@ -265,3 +268,36 @@ def test_an_error_that_is_not_an_interrupt_keeps_its_exit_code(monkeypatch, caps
     monkeypatch.setattr(cli, "build_parser", _parser_running(bug))
     with pytest.raises(RuntimeError, match="a bug"):
         cli.main([])
+
+
+def test_the_wakeup_watcher_never_reads_a_file_opened_after_main(tmp_path, monkeypatch):
+    # Regression (CI, once): main() returned before its Ctrl-C watcher thread had reached os.read; the
+    # pipe's read end was closed under it, the number went to the next file opened, and the thread's
+    # read took that file's first 64 bytes (a configuration file read back short).  Here the watcher is
+    # made late on purpose.  Truth: the bytes written to the file.
+    import threading
+
+    from kilnctl import cli
+
+    real_read = os.read
+
+    def late_read(fd, n):
+        if threading.current_thread().name == "kilnctl-sigint":
+            time.sleep(0.3)  # not yet scheduled when main() ends
+        return real_read(fd, n)
+
+    monkeypatch.setattr(os, "read", late_read)
+    state = cli._Interrupts()
+    previous = state.start_wakeup_watch()
+    state.done.set()
+    state.stop_wakeup_watch(previous)
+    data = bytes(range(256))
+    path = tmp_path / "after.bin"
+    path.write_bytes(data)
+    with open(path, "rb") as fh:
+        time.sleep(0.6)  # the watcher wakes while the file is open
+        assert fh.read() == data
+    for t in threading.enumerate():
+        if t.name == "kilnctl-sigint":
+            t.join(timeout=5)
+            assert not t.is_alive()

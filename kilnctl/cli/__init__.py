@@ -153,14 +153,28 @@ class _Interrupts:
         return previous
 
     def _wakeup_watch(self) -> None:
+        """The watcher thread: owns the read end of the wakeup pipe and closes it when it returns.
+
+        Only this thread closes the read end: closed from :meth:`stop_wakeup_watch` while the thread
+        had not yet reached ``os.read``, its number went to the next file the process opened and the
+        thread's read took that file's first 64 bytes (seen once in the suite: a configuration file
+        read back short).
+        """
+        try:
+            self._wakeup_loop()
+        finally:
+            with contextlib.suppress(OSError):
+                os.close(self.wakeup_r)
+
+    def _wakeup_loop(self) -> None:
         presses = 0
         while True:
             try:
                 data = os.read(self.wakeup_r, 64)
             except OSError:
-                return  # closed: main() is done
-            if not data or self.done.is_set():
                 return
+            if not data or self.done.is_set():
+                return  # main() is done (woken by stop_wakeup_watch, or the write end closed)
             presses += data.count(bytes([signal.SIGINT]))
             if presses == 0:
                 continue
@@ -179,14 +193,17 @@ class _Interrupts:
                 os._exit(EXIT_INTERRUPTED)
 
     def stop_wakeup_watch(self, previous: int) -> None:
-        """Restore the previous wakeup descriptor and end the watcher thread."""
+        """Restore the previous wakeup descriptor and end the watcher thread.
+
+        Only the write end is closed here; the watcher closes the read end itself as it returns
+        (:meth:`_wakeup_watch`).
+        """
         with contextlib.suppress(ValueError, OSError):
             signal.set_wakeup_fd(previous)
         with contextlib.suppress(OSError):
             os.write(self.wakeup_w, b"\0")  # wakes the watcher, which sees done and returns
-        for fd in (self.wakeup_w, self.wakeup_r):
-            with contextlib.suppress(OSError):
-                os.close(fd)
+        with contextlib.suppress(OSError):
+            os.close(self.wakeup_w)
 
     def _silence_c_stderr(self) -> None:
         """Silence what the libraries print after Ctrl-C; kilnctl's own line goes to :attr:`stderr`.
