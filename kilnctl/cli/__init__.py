@@ -350,8 +350,10 @@ def run() -> None:  # pragma: no cover - ends the process
 
     After a Ctrl-C (exit code 130) the process ends without the interpreter's finalization: the interrupt
     may have left a C library (CasADi, CVODES) in the middle of a computation, and its clean-up at exit
-    can abort the process (a CI run of the Ctrl-C test once ended with status -6 after printing
-    "kilnctl simulate: interrupted"); everything kilnctl writes is written whole or removed by then.
+    can abort the process (a CI run of the Ctrl-C test ended with status -6 after printing
+    "kilnctl simulate: interrupted" and "Fatal Python error: PyThreadState_Get ... finalizing");
+    everything kilnctl writes is written whole or removed by then.  ``kilnctl``, ``python -m kilnctl``
+    and ``python -m kilnctl.cli`` all end here.
     """
     code = main()
     if code == EXIT_INTERRUPTED:

@@ -1,5 +1,4 @@
-import sys
+"""``python -m kilnctl.cli``: the same command line as ``kilnctl`` and ``python -m kilnctl`` (:func:`run`)."""
+from . import run
 
-from . import main
-
-sys.exit(main())
+run()
