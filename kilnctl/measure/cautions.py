@@ -20,7 +20,7 @@ import numpy as np
 from ..errors import KilnctlError
 from .compare import level_caution
 from .effects import CATALOGUE
-from .evidence import NOISE_FIT, close_rival
+from .evidence import close_rival, within_noise
 from .report import listed, unit_of as _unit
 from .runner import CHANNELS, run_model
 
@@ -190,7 +190,7 @@ def effect_cautions(d, m, exp, params) -> list[str]:
         # ... unless the whitened BIC rises where the model with the effect fits within noise: the held-out
         # blocks share the fitting blocks' slow noise, and their z is then no confirmation (red team 14's C5: no
         # effect, a kiln unbalance at whitened +5.2 and held-out +21.3 % at 3.0 standard errors, no word)
-        slow = r.delta_bic_corrected > 0.0 and r.fit_percent.get("current_A", 0.0) >= NOISE_FIT
+        slow = r.delta_bic_corrected > 0.0 and within_noise(r.fit_percent)
         corrected = r.delta_bic_corrected if slow or not r.holdout_z > d.holdout_z else -math.inf
         said = caution_texts(name, span, period, eff.short_record_note, corrected, d.min_delta_bic)
         out += said or marginal_texts(name, r.delta_bic, r.holdout_gain, r.holdout_z, d.min_delta_bic,
