@@ -1492,3 +1492,24 @@ def test_a_model_whose_speed_misses_the_record_does_not_fit_within_its_noise(mon
     assert r.supported is supported, r.reason
     if not supported:
         assert "already fits within its noise" in r.reason
+
+
+@pytest.mark.parametrize("selected, times_top, said", [
+    (("second_motor", "drivetrain_compliance"), 12.9, True),   # red team 16's E3: k_po 2.96e9 for a top of 2.3e8
+    (("second_motor", "drivetrain_compliance"), 0.5, False),   # a stiffness a drive train has: no other place
+    (("drivetrain_compliance",), 12.9, False)])                # no second motor: the range caution alone
+def test_a_stiff_compliance_beside_a_second_motor_names_the_second_motors_shaft(selected, times_top, said):
+    # truth by construction: the caution is written when both effects are selected and k_po lies above the
+    # catalogue's usual range for this drive (red team 16's E3 and P1, a second motor on a shaft of its own,
+    # had k_po 13 and 42 times its top); the diagnosis is a stand-in with the final values
+    from kilnctl.measure.cautions import mode_place_texts
+    from kilnctl.measure.effects import CATALOGUE
+
+    lo, hi = CATALOGUE["drivetrain_compliance"].usual("k_po", SETUP)
+    d = SimpleNamespace(selected_=list(selected), final_calibration_=SimpleNamespace(
+        values_={"J_m2": 14.2, "k_po": times_top * hi, "C_po": 5.3e6}))
+    out = mode_place_texts(d, SETUP)
+    assert len(out) == int(said)
+    if said:
+        assert out[0].startswith("drivetrain_compliance with second_motor:") and "13 times the top" in out[0]
+        assert "second motor's shaft or coupling" in out[0] and "nan" not in out[0]

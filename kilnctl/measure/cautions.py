@@ -202,7 +202,42 @@ def effect_cautions(d, m, exp, params) -> list[str]:
         # the usual ranges scaled to this drive at the recorded set speed
         for note in eff.plausibility(d.final_calibration_.values_, params.replace(omega_ref=exp.omega_ref)):
             out.append(f"{name}: {note} (a value outside the usual range is reported, not refused)")
-    return out + drift_texts(d, params)
+    return out + mode_place_texts(d, params) + drift_texts(d, params)
+
+
+def mode_place_texts(d, params) -> list[str]:
+    """A drive-train compliance selected with a second motor, stiffer than the usual range: where it may ring.
+
+    The catalogue's compliance sits between the gearbox and the kiln.  A second motor coupled through a shaft of
+    its own rings at a frequency set by that shaft and J_m2, and the compliance reproduces that ring only with a
+    stiffness far above a drive train's: on red team 16's E3 and P1 (a second motor on a shaft of its own, 6 and
+    9.6 Hz) both effects were selected, with k_po 13 and 42 times the top of the usual range.  The caution names
+    the other place; it changes no selection.
+
+    Parameters
+    ----------
+    d : Diagnosis
+        The fitted diagnosis (its selection and final values).
+    params : Parameters
+        The setup.
+
+    Returns
+    -------
+    list of str
+        One caution, or none.
+    """
+    if not {"drivetrain_compliance", "second_motor"} <= set(d.selected_):
+        return []
+    values = d.final_calibration_.values_
+    k_po = values.get("k_po")
+    lo, hi = CATALOGUE["drivetrain_compliance"].usual("k_po", params)
+    if k_po is None or not k_po > hi:
+        return []
+    return [f"drivetrain_compliance with second_motor: k_po = {k_po:.3g} N*m/rad, {k_po / hi:.2g} times the top of "
+            f"the usual {lo:.2g}-{hi:.2g}. A second motor coupled through a shaft of its own rings at a frequency "
+            "set by that shaft and J_m2, which the catalogue's compliance (between the gearbox and the kiln) "
+            "matches only with a stiffness far above a drive train's: the ring may come from the second motor's "
+            "shaft or coupling rather than the gear train."]
 
 
 def drift_texts(d, params) -> list[str]:
