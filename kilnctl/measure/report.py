@@ -305,7 +305,7 @@ def pretty_unit(unit: str) -> str:
 
 
 def value_pair(v, se) -> tuple[str, str]:
-    """A value and its standard error as two strings with matching decimals: ``('579900', '180')``.
+    """A value and its standard error to the error's second significant digit: ``('579910', '180')``.
 
     Parameters
     ----------
@@ -325,9 +325,15 @@ def value_pair(v, se) -> tuple[str, str]:
         return f"{v:.4g}", ""
     exp = int(math.floor(math.log10(se)))
     if abs(v) >= 1e7 or (abs(v) < 1e-3 and v != 0) or exp < -6:
-        return f"{v:.4e}", f"{se:.1e}"
-    dec = max(0, 1 - exp)
-    return f"{v:.{dec}f}", f"{se:.{dec}f}"
+        # the mantissa to the error's second significant digit: 2.955e+09 ± 2.6e+07, not 2.9552e+09
+        ev = int(math.floor(math.log10(abs(v)))) if v != 0 else exp
+        return f"{v:.{min(6, max(0, ev - exp + 1))}e}", f"{se:.1e}"
+    step = exp - 1  # the decade of the error's second significant digit
+    if step < 0:
+        return f"{v:.{-step}f}", f"{se:.{-step}f}"
+    # whole numbers rounded there too: 5300000 ± 2100000, not 5309316 ± 2072959
+    q = 10.0 ** step
+    return f"{round(v / q) * q:.0f}", f"{round(se / q) * q:.0f}"
 
 
 def _fmt_val(v, se) -> str:
