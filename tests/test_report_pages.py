@@ -42,6 +42,7 @@ def test_number_and_uncertainty_formatting():
     assert value_pair(5309316.0, 2072959.0) == ("5300000", "2100000")  # red team 16's E3: C_po
     assert value_pair(2.9552e9, 2.6e7) == ("2.955e+09", "2.6e+07")  # and k_po
     assert value_pair(0.0, 0.004) == ("0.0000", "0.0040")
+    assert value_pair(-3.0, 200.0) == ("0", "200")  # a value within its error of zero: not "-0"
     assert value_pair(0.4208, float("inf")) == ("0.4208", "")
     assert "not identifiable" in uncertainty_words(math.inf) and "inf" not in uncertainty_words(math.inf)
     assert "on its bound" in uncertainty_words(0.1, on_bound=True)

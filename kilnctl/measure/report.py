@@ -333,7 +333,7 @@ def value_pair(v, se) -> tuple[str, str]:
         return f"{v:.{-step}f}", f"{se:.{-step}f}"
     # whole numbers rounded there too: 5300000 ± 2100000, not 5309316 ± 2072959
     q = 10.0 ** step
-    return f"{round(v / q) * q:.0f}", f"{round(se / q) * q:.0f}"
+    return f"{round(v / q) * q + 0.0:.0f}", f"{round(se / q) * q:.0f}"  # + 0.0: never "-0"
 
 
 def _fmt_val(v, se) -> str:
