@@ -151,7 +151,8 @@ def skew_texts(comparison, selected=()) -> list[str]:
 def effect_cautions(d, m, exp, params) -> list[str]:
     """Warnings about the selected effects of a fitted diagnosis ``d``: evidence weaker than the criteria
     suggest (:func:`caution_texts`), a rival the record hardly tells apart (:func:`rival_texts`), values outside
-    the usual range, and base values far from the setup's (:func:`drift_texts`).
+    the usual range, a stiff compliance beside a second motor (:func:`mode_place_texts`), and base values far
+    from the setup's (:func:`drift_texts`).
 
     Parameters
     ----------
