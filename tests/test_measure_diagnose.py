@@ -1513,3 +1513,64 @@ def test_a_stiff_compliance_beside_a_second_motor_names_the_second_motors_shaft(
     if said:
         assert out[0].startswith("drivetrain_compliance with second_motor:") and "13 times the top" in out[0]
         assert "second motor's shaft or coupling" in out[0] and "nan" not in out[0]
+
+
+@pytest.mark.parametrize("far", [True, False])
+def test_forms_are_not_fitted_for_a_round_that_is_refitted(far):
+    # truth by construction: the re-anchoring is tried before the forms; when it moves the model so far that
+    # the caller refits the round (red team 16's S1: 126 of 353 s went to forms of such rounds), the forms are
+    # not fitted and its lines are said; otherwise the forms are fitted against the current model and the
+    # re-anchoring runs again on their results, its refits shared through one ``done`` dict, as before the
+    # shortcut.  Stand-ins: only the order of the steps is tested
+    d = Diagnosis(SETUP)
+    current, anchored = SimpleNamespace(cost_=700.0), SimpleNamespace(cost_=500.0)
+    calls, said, dones = [], [], []
+    r, judged, form = (SimpleNamespace(name=n, supported=True, delta_bic=b)
+                       for n, b in (("r", -20.0), ("judged", -10.0), ("form", -30.0)))
+
+    def reanchor(m, params, selected, cur, results, scales, train, test, exp, say, done):
+        calls.append(("reanchor", [x.name for x in results]))
+        dones.append(done)
+        say("moved")
+        return anchored, results + [judged]
+
+    def in_best_form(m, params, selected, results, *a):
+        calls.append(("forms", [x.name for x in results]))
+        return results + [form]
+
+    d._reanchor, d._in_best_form = reanchor, in_best_form
+    model, results = d._forms_then_anchor(None, SETUP, [], current, [r], None, None, None, None, None,
+                                          said.append, lambda a: far)
+    assert model is anchored
+    if far:
+        assert calls == [("reanchor", ["r"])] and results == [r, judged] and said == ["moved"]
+    else:
+        # the forms' results sorted by dBIC before the second re-anchoring (form -30 before r -20)
+        assert calls == [("reanchor", ["r"]), ("forms", ["r"]), ("reanchor", ["form", "r"])]
+        assert results == [form, r, judged] and said == ["moved"] and dones[0] is dones[1]
+
+
+def test_re_anchoring_twice_on_a_round_refits_the_structure_once():
+    # truth by construction: the second re-anchoring of a round (after its forms) starts from the same
+    # candidates' base values as the first, whose refits of the current structure it reuses (one refit per
+    # starting point, counted); it judges them and moves the model as the first did
+    d = Diagnosis(SETUP)
+    current = SimpleNamespace(cost_=700.0, values_={"mu_c": 0.4})
+    refit = SimpleNamespace(cost_=500.0, values_={"mu_c": 0.45})
+    cand = SimpleNamespace(effect="second_motor", supported=True, stand_in=False, delta_bic=-50.0,
+                           calibration=SimpleNamespace(values_={"mu_c": 0.45, "J_m2": 3.0}), wall_s=0.0)
+    starts = []
+
+    def calibrate(m, params, effects, scales, mask, init, **kw):
+        starts.append(dict(init))
+        return refit
+
+    d._calibrate = calibrate
+    d._first_failure = lambda m, cur, exp: None
+    d._evidence = lambda m, effect, cal, cur, *a: SimpleNamespace(effect=effect, supported=False, stand_in=False,
+                                                                  delta_bic=-5.0, calibration=cal, form=None)
+    done = {}
+    for _ in range(2):
+        model, results = d._reanchor(None, SETUP, [], current, [cand], None, None, None, None, lambda s: None, done)
+        assert model is refit and not results[0].supported
+    assert starts == [{"mu_c": 0.45}]
