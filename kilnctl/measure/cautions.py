@@ -5,8 +5,8 @@
   channels skewed, or a lag in the speed's sensor);
 - :func:`effect_cautions`: per selected effect, a record shorter than its period or evidence weak once the
   residual's autocorrelation is allowed for (:func:`caution_texts`), a rival the record hardly tells apart
-  (:func:`rival_texts`), values outside the usual range; and base values far from the setup's
-  (:func:`drift_texts`).
+  (:func:`rival_texts`), values outside the usual range; an effect the backward check removed on the
+  whitened BIC alone (:func:`removed_texts`); and base values far from the setup's (:func:`drift_texts`).
 
 Used by :class:`~kilnctl.measure.diagnose.Diagnosis` to fill ``setup_cautions_`` and ``caveats_``.
 """
@@ -24,8 +24,8 @@ from .evidence import close_rival, within_noise
 from .report import listed, unit_of as _unit
 from .runner import CHANNELS, run_model
 
-__all__ = ["setup_cautions", "effect_cautions", "drift_texts", "rival_texts", "caution_texts", "skew_texts",
-           "best_shift", "DRIFT_CHECKED", "SETUP_DRIFT", "SKEW_MAX_S", "SKEW_GAIN"]
+__all__ = ["setup_cautions", "effect_cautions", "drift_texts", "removed_texts", "rival_texts", "caution_texts",
+           "skew_texts", "best_shift", "DRIFT_CHECKED", "SETUP_DRIFT", "SKEW_MAX_S", "SKEW_GAIN"]
 
 #: the final model's base values checked against the setup's, and the fraction [-] beyond which a caution says
 #: so (mu_s is left out: outside stick-slip only the breakaway shows it, and it is fitted loosely)
@@ -151,8 +151,9 @@ def skew_texts(comparison, selected=()) -> list[str]:
 def effect_cautions(d, m, exp, params) -> list[str]:
     """Warnings about the selected effects of a fitted diagnosis ``d``: evidence weaker than the criteria
     suggest (:func:`caution_texts`), a rival the record hardly tells apart (:func:`rival_texts`), values outside
-    the usual range, a stiff compliance beside a second motor (:func:`mode_place_texts`), and base values far
-    from the setup's (:func:`drift_texts`).
+    the usual range, an effect removed on the whitened BIC alone (:func:`removed_texts`), a stiff compliance
+    beside a second motor (:func:`mode_place_texts`), and base values far from the setup's
+    (:func:`drift_texts`).
 
     Parameters
     ----------
@@ -203,7 +204,41 @@ def effect_cautions(d, m, exp, params) -> list[str]:
         # the usual ranges scaled to this drive at the recorded set speed
         for note in eff.plausibility(d.final_calibration_.values_, params.replace(omega_ref=exp.omega_ref)):
             out.append(f"{name}: {note} (a value outside the usual range is reported, not refused)")
-    return out + mode_place_texts(d, params) + drift_texts(d, params)
+    return out + removed_texts(d) + mode_place_texts(d, params) + drift_texts(d, params)
+
+
+def removed_texts(d) -> list[str]:
+    """A caution for each effect the backward check removed on the BIC with the noise's correlation modelled
+    alone, where the plain BIC and the held-out part favoured keeping it (dBIC below minus the threshold, a
+    held-out gain above ``min_holdout_gain``): the selection kept is then one of two readings the record
+    hardly tells apart.  On red team 17's E5 (an idle second rotor behind a fluid coupling) the second motor,
+    added first, was removed beside a drag at whitened dBIC +14.3 though its plain dBIC was -383.4 and its
+    held-out gain +17.4 % (1.5 standard errors), and the drag alone was reported with no word of it.
+
+    Parameters
+    ----------
+    d : Diagnosis
+        The fitted diagnosis (its removed effects, selection and thresholds).
+
+    Returns
+    -------
+    list of str
+    """
+    out = []
+    kept = listed(list(d.selected_)) or "the base model"
+    for r in getattr(d, "removed_", ()):
+        if not r.reason.startswith("removed in the backward check"):
+            continue
+        if r.delta_bic <= -d.min_delta_bic and r.holdout_gain > d.min_holdout_gain \
+                and r.delta_bic_corrected > -d.min_delta_bic:
+            z = f", {r.holdout_z:.1f} standard errors" if r.holdout_z is not None and math.isfinite(r.holdout_z) \
+                else ""
+            out.append(f"{r.effect} was removed in the backward check on the BIC with the noise's correlation "
+                       f"modelled alone (whitened dBIC {r.delta_bic_corrected:+.1f}), though the plain BIC (dBIC "
+                       f"{r.delta_bic:+.1f}) and the held-out part (gain {r.holdout_gain:+.1f} %{z}) favoured "
+                       f"keeping it: on this record {kept} and {r.effect} change the current alike, and "
+                       f"{r.effect} may be the cause. {_DECIDES}")
+    return out
 
 
 def mode_place_texts(d, params) -> list[str]:
