@@ -150,6 +150,26 @@ def test_a_low_order_of_the_kiln_speed_points_to_a_pinion():
     assert "girth gear of that many teeth" in high and "motor's rotation" in high
 
 
+@pytest.mark.parametrize("f_hz, df_hz, whole, said", [
+    (13.28125, 100.0 / 1024, True, "1.00 times the motor's rotation (13.33 Hz): at a whole multiple"),  # X1
+    (13.37890625, 100.0 / 1024, True, "1.00 times the motor's rotation (13.33 Hz): at a whole multiple"),
+    (13.18359375, 100.0 / 1024, False, "0.99 times the motor's rotation (13.33 Hz), no whole multiple"),
+    (13.28125, 0.01, False, "0.996 times the motor's rotation (13.33 Hz), no whole multiple"),
+    (20.0, 100.0 / 1024, False, "1.50 times the motor's rotation (13.33 Hz), no whole multiple")])
+def test_a_line_a_bin_from_the_motors_speed_is_its_order(f_hz, df_hz, whole, said):
+    """Truth by arithmetic: at 800 rpm the motor turns at 13.333 Hz; with Welch's step of 0.09766 Hz (1024
+    samples at 100 Hz, red team 17's X1) the bins either side of it, 13.281 and 13.379 Hz, are its first order
+    (a line between two bins peaks in either), 13.184 Hz (1.5 steps below) is not; with a step of 0.01 Hz
+    13.281 Hz is 5 steps off, and its order is printed with the digits that show it (0.996, not 1.00)."""
+    from kilnctl.measure.signature import _shaft_orders
+
+    t = np.arange(0.0, 30.0, 0.01)
+    speed = np.full(t.size, 800.0)
+    text = _shaft_orders(f_hz, df_hz, speed, t, 1100.0, 0.0)
+    assert said in text
+    assert ("it comes from that shaft" in text) is whole
+
+
 @pytest.mark.parametrize("n, few", [(1076.5, True), (100.0, False)])
 def test_a_once_per_turn_torque_over_few_turns_names_slow_noise_beside_it(n, few):
     """Truth by construction: the generator's record with a once-per-turn current of 25 A added, the kiln angle

@@ -324,7 +324,11 @@ def _shaft_orders(f_hz: float, df_hz: float, speed_rpm, t, n: float, steady_from
     A vibration at a whole multiple of a shaft's speed comes from that shaft: a gear's tooth passing (the girth
     gear's Z teeth at Z times the kiln's speed), a run-out.  The spectrum resolves ``df_hz`` (0.1 Hz with its
     10 s segments), so each order is given with its spread, half that step.  The motor's order is resolved (a
-    few hundredths); it is called whole only within its spread.  The kiln's is not on a start-up record (about
+    few hundredths); it is called whole within one step either way: a line between two bins peaks in either,
+    as noise or the ramp's slower part of the line tips it (red team 17's X1, a tacho's ripple once per motor
+    turn: the peak at 13.28 Hz, 0.54 of a step below the motor's 13.33 Hz, had been "1.00 times the motor's
+    rotation ..., no whole multiple"); an order that is not whole is printed with the digits that show it.
+    The kiln's is not on a start-up record (about
     +-6 on a kiln turning once in 129 s: every frequency lies that close to a whole multiple), so the hint
     gives it as the tooth count that would make it, for the user to compare with the girth gear's, and does not
     say it is whole (red team 9: "1602 (+-6) times the kiln's ... it comes from that shaft" for a loop's
@@ -339,10 +343,13 @@ def _shaft_orders(f_hz: float, df_hz: float, speed_rpm, t, n: float, steady_from
     spread_m = 0.5 * df_hz / f_motor
     spread_k = 0.5 * df_hz / f_kiln
     order_m = f_hz / f_motor
-    whole_m = round(order_m) >= 1 and abs(order_m - round(order_m)) <= spread_m
+    whole_m = round(order_m) >= 1 and abs(order_m - round(order_m)) <= 2.0 * spread_m
+    digits = 2
+    while not whole_m and digits < 6 and round(order_m, digits) == round(order_m) >= 1:
+        digits += 1  # "0.996 times ..., no whole multiple", not "1.00 times"
     motor = (f"; it is {order_m:.2f} times the motor's rotation ({f_motor:.2f} Hz): at a whole multiple of the "
              f"motor's speed it comes from that shaft (a run-out, a gear's tooth passing on the motor side)" if whole_m
-             else f"; it is {order_m:.2f} times the motor's rotation ({f_motor:.2f} Hz), no whole multiple")
+             else f"; it is {order_m:.{digits}f} times the motor's rotation ({f_motor:.2f} Hz), no whole multiple")
     order_k = f_hz / f_kiln
     if spread_k < 0.5:
         kiln = (f", and {order_k:.0f} times the kiln's ({1.0 / f_kiln:.0f} s a turn)"
