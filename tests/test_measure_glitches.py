@@ -41,6 +41,9 @@ def test_spikes_of_one_and_two_samples_are_found_and_noted(record):
     (note,) = [n for n in spiked.notes if "spike" in n]
     assert note.startswith("column 'current_A': 3 isolated spike(s) of one or two samples (2 of two)")
     assert "Their 5 sample(s) are left out of fits, evidence and fit %" in note
+    # the record's own step (make_record samples at 50 Hz), not another record's (the note had said "a backlash
+    # impact sampled at 10 Hz" on red team 17's 100 Hz record)
+    assert "shorter than the sample step of 20 ms (a backlash's impact lasts a few milliseconds)?" in note
     kept = spiked.kept
     assert kept.sum() == spiked.n - 5 and not kept[[300, 301, 700, 1200, 1201]].any()
 

@@ -181,7 +181,7 @@ def glitch_mask(found, n: int) -> np.ndarray:
     return keep
 
 
-def glitch_notes(found, arrays, lines, row_word, labels=None) -> list[str]:
+def glitch_notes(found, arrays, lines, row_word, labels=None, step_s: float | None = None) -> list[str]:
     """One reader's note per channel with spikes: how many, the largest, and that they are left out.
 
     Parameters
@@ -194,12 +194,15 @@ def glitch_notes(found, arrays, lines, row_word, labels=None) -> list[str]:
         File line (row) of each sample, and what it counts.
     labels : dict, optional
         The record's own column names, for the notes.
+    step_s : float, optional
+        The record's sample step [s], named in the notes.
 
     Returns
     -------
     list of str
         The notes.
     """
+    step = f" of {step_s * 1e3:.3g} ms" if step_s is not None and step_s > 0 else ""
     units = {"current_A": "A", "speed_rpm": "rpm"}
     out = []
     for name in ("current_A", "speed_rpm"):
@@ -218,6 +221,6 @@ def glitch_notes(found, arrays, lines, row_word, labels=None) -> list[str]:
                    f"{float(a[g.peak]):.4g} {unit} where the samples around it read about "
                    f"{float(a[g.peak] - g.size):.4g} {unit} ({g.sigmas:.0f} noise standard deviations): a "
                    f"glitch (a converter's or a contactor's interference, a logger's error) or an event shorter than "
-                   f"the sample step (a backlash impact sampled at 10 Hz)? Their {n_samples} sample(s) are left out "
+                   f"the sample step{step} (a backlash's impact lasts a few milliseconds)? Their {n_samples} sample(s) are left out "
                    "of fits, evidence and fit % (no model makes such a spike); correct the record if they are real")
     return out

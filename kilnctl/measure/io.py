@@ -1086,7 +1086,7 @@ def _checked(arrays, lines, source, params, notes, row_word, labels=None, log=Fa
                             "with a wider range")
         resampled = resampled_notes(t, arrays, med)
         notes = tuple(notes) + tuple(sampling_notes(t, dts, med, lines, row_word, GAP_FACTOR)) \
-            + tuple(glitch_notes(spikes, arrays, lines, row_word, labels)) \
+            + tuple(glitch_notes(spikes, arrays, lines, row_word, labels, med)) \
             + tuple(frozen_notes(t, arrays, lines, row_word)) \
             + tuple(resampled) + tuple(clipped_notes(clipped, arrays, t, lines, row_word, labels)) \
             + tuple(() if resampled else speed_step_notes(arrays))  # (held values repeat as counts do)
