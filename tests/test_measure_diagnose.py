@@ -1533,6 +1533,8 @@ def test_an_effect_removed_on_the_whitened_bic_alone_is_named(reason, dbic, whit
     d = SimpleNamespace(selected_=["viscous_drag"], removed_=[r], min_delta_bic=10.0, min_holdout_gain=2.0)
     out = removed_texts(d)
     assert len(out) == int(said)
+    # no selection and nothing removed (most diagnoses of a record with no effect): nothing, and no error
+    assert removed_texts(SimpleNamespace(selected_=[], removed_=[], min_delta_bic=10.0, min_holdout_gain=2.0)) == []
     if said:
         assert out[0].startswith("second_motor was removed in the backward check")
         assert "(whitened dBIC +14.3)" in out[0] and "(dBIC -383.4)" in out[0]

@@ -225,7 +225,7 @@ def removed_texts(d) -> list[str]:
     list of str
     """
     out = []
-    kept = listed(list(d.selected_)) or "the base model"
+    kept = listed(list(d.selected_)) if d.selected_ else "the base model"
     for r in getattr(d, "removed_", ()):
         if not r.reason.startswith("removed in the backward check"):
             continue
