@@ -221,6 +221,7 @@ def glitch_notes(found, arrays, lines, row_word, labels=None, step_s: float | No
                    f"{float(a[g.peak]):.4g} {unit} where the samples around it read about "
                    f"{float(a[g.peak] - g.size):.4g} {unit} ({g.sigmas:.0f} noise standard deviations): a "
                    f"glitch (a converter's or a contactor's interference, a logger's error) or an event shorter than "
-                   f"the sample step{step} (a backlash's impact lasts a few milliseconds)? Their {n_samples} sample(s) are left out "
-                   "of fits, evidence and fit % (no model makes such a spike); correct the record if they are real")
+                   f"the sample step{step} (a backlash's impact lasts a few milliseconds)? Their {n_samples} "
+                   "sample(s) are left out of fits, evidence and fit % (no model makes such a spike); correct the "
+                   "record if they are real")
     return out

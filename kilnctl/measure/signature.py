@@ -319,8 +319,8 @@ def spectral_line(t, e) -> dict | None:
 
 def _follows_elsewhere(comp: Comparison, apart) -> bool:
     """True when the model's speed leaves the measured one only over the stretch ``apart`` (a failing interval
-    of the speed, or None) and follows it elsewhere: outside it, over at least half of the record after the
-    model's start, the speed fits to :data:`SPEED_FIT_MIN` or more.  The stretch is then the story (a limit the
+    of the speed, or None) and follows it elsewhere: outside it, over at least half of the samples where the
+    drive turns (above 5 % of the record's top speed), the speed fits to :data:`SPEED_FIT_MIN` or more.  The stretch is then the story (a limit the
     model lacks), not a model that does not run the start-up (red team 17's E3: a current limit rising with
     time held the speed up to 108 rpm behind its reference for 10 s, speed fit 85.2 %, and the hint had been
     to check the reference, the speed's unit and the gains)."""
