@@ -157,8 +157,31 @@ def test_a_speed_behind_for_a_stretch_is_a_limit_not_a_lost_start_up(stretch, st
     if story == "falls behind":
         assert hint.startswith("the measured speed falls behind the model's for "), hint
         assert "a current or voltage limit lower or softer than modelled" in hint
+        assert "ramp generator" not in hint  # the stretch lies after the ramp (which ends at 11 s)
     else:
         assert hint.startswith("the model does not run the recorded start-up"), hint
+
+
+def test_a_speed_behind_a_ramp_by_a_constant_delay_names_the_drives_own_reference():
+    """Truth by construction: the generator's record with its measured speed delayed by 0.5 s (a drive whose
+    ramp generator starts the ramp late; red team 17's X3), the current unchanged: during the ramp of 50 rpm/s
+    the speed runs 25 rpm behind the model's, and the hint gives the delay, 0.5 s, from the stretch's mean
+    miss over the ramp's slope."""
+    from kilnctl import Parameters
+    from kilnctl.measure import Measurement, compare
+    from kilnctl.measure.signature import residual_signature
+    from kilnctl.measure.synthetic import DEFAULT_GAINS, make_record
+
+    setup = Parameters(DEFAULT_GAINS)
+    m0, truth = make_record((), seed=5, t_end=30.0)
+    plant = setup.replace(**truth["plant"])
+    late = np.interp(m0.t - 0.5, m0.t, m0.speed)
+    m = Measurement.from_arrays(m0.t, m0.current, late, m0.speed_ref, source="late", params=setup)
+    hint = residual_signature(compare(m, plant), setup.n)["hint"]
+    assert hint.startswith("the measured speed falls behind the model's for "), hint
+    words = hint.split("lags the logged one by about ")[1]
+    assert float(words.split(" s")[0]) == pytest.approx(0.5, abs=0.1)
+    assert "a ramp generator that rounds or delays the ramp" in hint
 
 
 def test_a_low_order_of_the_kiln_speed_points_to_a_pinion():

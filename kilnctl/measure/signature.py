@@ -17,7 +17,7 @@ from .compare import Comparison
 from .evidence import variance_inflation
 from .io import Measurement
 from .runner import kiln_angle
-from .stats import best_step, fit_percent, median_step, robust_sigma
+from .stats import best_step, median_step, robust_sigma
 
 __all__ = ["residual_signature", "standstill_offsets", "window_mean_spread", "fit_points", "NARROWBAND_RATIO",
            "EVENT_TIMING_S", "MATERIAL_FIT_POINTS", "SPEED_APART_S", "MIN_WINDOWS", "spectral_line",
@@ -37,6 +37,9 @@ MATERIAL_FIT_POINTS = 0.2
 #: in about a second (1.1 s to 2 % for a step, the linear loop with the example's gains), so the measured speed
 #: stays away from the model's for longer only while the drive delivers a different torque (or the load differs)
 SPEED_APART_S = 1.0
+#: a model speed whose median slope over such a stretch exceeds this fraction of its top speed per second is
+#: ramping there (a ramp to the set speed in 50 s or less) [1/s]
+RAMP_SLOPE = 0.02
 #: kiln turns a record must span for the residual's once-per-turn regressor to name a torque that repeats with
 #: each turn without naming a slow drift or slowly correlated noise beside it (:func:`residual_signature`)
 MIN_TURNS = 2.0
@@ -317,10 +320,34 @@ def spectral_line(t, e) -> dict | None:
     return {"hz": float(f[k]), "ratio": ratio, "columns": np.column_stack([np.sin(w * t), np.cos(w * t)])}
 
 
+def _reference_lag_words(comp: Comparison, apart) -> str:
+    """For a stretch where the measured speed is away from the model's while the model's speed ramps (its
+    median slope there above :data:`RAMP_SLOPE` of the top speed per second): the time by which the drive's own
+    reference would lag (or lead) the logged one to make that difference, "" otherwise.  A drive whose ramp
+    generator rounds the ramp, or starts it late, runs behind a logged straight ramp by a nearly constant
+    speed, a delay times the ramp's rate (red team 17's X3: 31.6 rpm behind for 15 s on a ramp of 60 rpm/s,
+    0.53 s; the hint had named only a limit or a load)."""
+    c = comp.channels["speed_rpm"]
+    t = comp.t
+    sl = (t >= apart["t_start"]) & (t <= apart["t_end"])
+    if sl.sum() < 5:
+        return ""
+    slope = float(np.median(np.gradient(c.model[sl], t[sl])))
+    top = max(float(np.max(np.abs(c.model))), 1e-9)
+    if not abs(slope) > RAMP_SLOPE * top:
+        return ""
+    lag = -apart["mean_residual"] / slope  # [s]: positive when the measured speed runs behind on a rising ramp
+    return (f"; or the drive follows a speed reference of its own that {'lags' if lag > 0 else 'leads'} the logged "
+            f"one by about {abs(lag):.2g} s while it ramps ({abs(apart['mean_residual']):.1f} rpm at "
+            f"{abs(slope):.3g} rpm/s): a ramp generator that rounds or delays the ramp")
+
+
 def _follows_elsewhere(comp: Comparison, apart) -> bool:
     """True when the model's speed leaves the measured one only over the stretch ``apart`` (a failing interval
-    of the speed, or None) and follows it elsewhere: outside it, over at least half of the samples where the
-    drive turns (above 5 % of the record's top speed), the speed fits to :data:`SPEED_FIT_MIN` or more.  The stretch is then the story (a limit the
+    of the speed, or None) and follows it elsewhere: the stretch holds less than half of the samples where the
+    drive turns (above 5 % of the record's top speed), and with its residual taken away the speed would fit to
+    :data:`SPEED_FIT_MIN` or more (:func:`fit_points`; a fit % of the samples outside it alone would be near
+    zero where they hold the set speed, whose spread is noise).  The stretch is then the story (a limit the
     model lacks), not a model that does not run the start-up (red team 17's E3: a current limit rising with
     time held the speed up to 108 rpm behind its reference for 10 s, speed fit 85.2 %, and the hint had been
     to check the reference, the speed's unit and the gains)."""
@@ -328,11 +355,11 @@ def _follows_elsewhere(comp: Comparison, apart) -> bool:
         return False
     c = comp.channels["speed_rpm"]
     t = comp.t
-    out = (t < apart["t_start"]) | (t > apart["t_end"])
+    inside = (t >= apart["t_start"]) & (t <= apart["t_end"])
     moving = np.abs(c.measured) > 0.05 * max(float(np.max(np.abs(c.measured))), 1e-9)
-    if (out & moving).sum() < 0.5 * moving.sum():
+    if (inside & moving).sum() > 0.5 * moving.sum():
         return False
-    return fit_percent(c.measured[out & moving], c.model[out & moving]) >= SPEED_FIT_MIN
+    return comp.fit["speed_rpm"] + fit_points(c.measured, c.residual, inside) >= SPEED_FIT_MIN
 
 
 def _shaft_orders(f_hz: float, df_hz: float, speed_rpm, t, n: float, steady_from: float | None) -> str:
@@ -556,7 +583,8 @@ def residual_signature(comp: Comparison, n: float, steady_from: float | None = N
                 f"{'less' if behind else 'more'} torque than modelled there, or the load was "
                 f"{'greater' if behind else 'smaller'} ("
                 + ("a current or voltage limit lower or softer than modelled, or a load the model lacks)" if behind
-                   else "a limit higher than modelled, or a load the model has too much of)"))
+                   else "a limit higher than modelled, or a load the model has too much of)")
+                + _reference_lag_words(comp, apart))
     elif following:
         # the current's regressors cannot see it: the speed loop itself follows otherwise than modelled
         hint = (f"the measured speed departs from the model's by up to {float(np.max(np.abs(es))):.2g} rpm (RMS "
