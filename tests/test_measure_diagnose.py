@@ -1515,26 +1515,29 @@ def test_a_stiff_compliance_beside_a_second_motor_names_the_second_motors_shaft(
         assert "second motor's shaft or coupling" in out[0] and "nan" not in out[0]
 
 
-@pytest.mark.parametrize("reason, dbic, whitened, gain, said", [
-    ("removed in the backward check: ...", -383.4, 14.3, 17.4, True),   # red team 17's E5
-    ("removed in the backward check: ...", -383.4, -14.3, 17.4, False),  # whitened falls too: removed otherwise
-    ("removed in the backward check: ...", -383.4, 14.3, 1.0, False),    # held-out gain below 2 %: noise
-    ("removed in the backward check: ...", -5.0, 14.3, 17.4, False),     # plain BIC within the threshold
-    ("replaced by viscous_drag in the swap check: ...", -383.4, 14.3, 17.4, False)])  # a swap tells its own story
-def test_an_effect_removed_on_the_whitened_bic_alone_is_named(reason, dbic, whitened, gain, said):
-    # truth by construction: the caution is written for a backward-check removal where the plain BIC (below
-    # -10) and the held-out gain (above 2 %) favoured keeping the effect and the whitened BIC alone did not
-    # (red team 17's E5: second_motor removed beside viscous_drag at dBIC -383.4, whitened +14.3, held-out
-    # +17.4 % at 1.5 standard errors); the diagnosis is a stand-in with E5's numbers
+@pytest.mark.parametrize("check, dbic, whitened, gain, said", [
+    ("backward", -383.4, 14.3, 17.4, True),   # red team 17's E5
+    ("backward", -383.4, -14.3, 17.4, False),  # whitened falls too: removed otherwise
+    ("backward", -383.4, 14.3, 1.0, False),    # held-out gain below 2 %: noise
+    ("backward", -5.0, 14.3, 17.4, False),     # plain BIC within the threshold
+    ("swap", -383.4, 14.3, 17.4, False)])      # the swap check's replacement tells its own story
+def test_an_effect_removed_on_the_whitened_bic_alone_is_named(check, dbic, whitened, gain, said):
+    # truth by construction: the caution is written for a removal the backward check judged (its judgement kept
+    # in checks_) where the plain BIC (below -10) and the held-out gain (above 2 %) favoured keeping the effect
+    # and the whitened BIC alone did not (red team 17's E5: second_motor removed beside viscous_drag at dBIC
+    # -383.4, whitened +14.3, held-out +17.4 % at 1.5 standard errors); the diagnosis is a stand-in with E5's
+    # numbers
     from kilnctl.measure.cautions import removed_texts
 
-    r = SimpleNamespace(effect="second_motor", reason=reason, delta_bic=dbic, delta_bic_corrected=whitened,
+    r = SimpleNamespace(effect="second_motor", reason="...", delta_bic=dbic, delta_bic_corrected=whitened,
                         holdout_gain=gain, holdout_z=1.46)
-    d = SimpleNamespace(selected_=["viscous_drag"], removed_=[r], min_delta_bic=10.0, min_holdout_gain=2.0)
+    d = SimpleNamespace(selected_=["viscous_drag"], removed_=[r], checks_=[(check, r)], min_delta_bic=10.0,
+                        min_holdout_gain=2.0)
     out = removed_texts(d)
     assert len(out) == int(said)
     # no selection and nothing removed (most diagnoses of a record with no effect): nothing, and no error
-    assert removed_texts(SimpleNamespace(selected_=[], removed_=[], min_delta_bic=10.0, min_holdout_gain=2.0)) == []
+    assert removed_texts(SimpleNamespace(selected_=[], removed_=[], checks_=[], min_delta_bic=10.0,
+                                         min_holdout_gain=2.0)) == []
     if said:
         assert out[0].startswith("second_motor was removed in the backward check")
         assert "(whitened dBIC +14.3)" in out[0] and "(dBIC -383.4)" in out[0]

@@ -218,7 +218,8 @@ def removed_texts(d) -> list[str]:
     Parameters
     ----------
     d : Diagnosis
-        The fitted diagnosis (its removed effects, selection and thresholds).
+        The fitted diagnosis (its removed effects, the backward check's judgements in ``checks_``, selection
+        and thresholds).
 
     Returns
     -------
@@ -226,8 +227,9 @@ def removed_texts(d) -> list[str]:
     """
     out = []
     kept = listed(list(d.selected_)) if d.selected_ else "the base model"
+    backward = [r for check, r in getattr(d, "checks_", ()) if check == "backward"]
     for r in getattr(d, "removed_", ()):
-        if not r.reason.startswith("removed in the backward check"):
+        if not any(r is b for b in backward):  # the swap and the final check tell their own story
             continue
         if r.delta_bic <= -d.min_delta_bic and r.holdout_gain > d.min_holdout_gain \
                 and r.delta_bic_corrected > -d.min_delta_bic:

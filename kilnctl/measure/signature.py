@@ -368,7 +368,7 @@ def _shaft_orders(f_hz: float, df_hz: float, speed_rpm, t, n: float, steady_from
 
     A vibration at a whole multiple of a shaft's speed comes from that shaft: a gear's tooth passing (the girth
     gear's Z teeth at Z times the kiln's speed), a run-out.  The spectrum resolves ``df_hz`` (0.1 Hz with its
-    10 s segments), so each order is given with its spread, half that step.  The motor's order is resolved (a
+    10 s segments), so the kiln's order is given with its spread, half that step.  The motor's is resolved (a
     few hundredths); it is called whole within one step either way: a line between two bins peaks in either,
     as noise or the ramp's slower part of the line tips it (red team 17's X1, a tacho's ripple once per motor
     turn: the peak at 13.28 Hz, 0.54 of a step below the motor's 13.33 Hz, had been "1.00 times the motor's
@@ -385,10 +385,9 @@ def _shaft_orders(f_hz: float, df_hz: float, speed_rpm, t, n: float, steady_from
         return ""
     f_motor = float(np.median(steady)) / 60.0
     f_kiln = f_motor / n
-    spread_m = 0.5 * df_hz / f_motor
     spread_k = 0.5 * df_hz / f_kiln
     order_m = f_hz / f_motor
-    whole_m = round(order_m) >= 1 and abs(order_m - round(order_m)) <= 2.0 * spread_m
+    whole_m = round(order_m) >= 1 and abs(order_m - round(order_m)) <= df_hz / f_motor  # one step either way
     digits = 2
     while not whole_m and digits < 6 and round(order_m, digits) == round(order_m) >= 1:
         digits += 1  # "0.996 times ..., no whole multiple", not "1.00 times"
