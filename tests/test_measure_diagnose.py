@@ -1548,7 +1548,7 @@ def test_an_effect_removed_on_the_whitened_bic_alone_is_named(check, dbic, white
 @pytest.mark.parametrize("far", [True, False])
 def test_forms_are_not_fitted_for_a_round_that_is_refitted(far):
     # truth by construction: the re-anchoring is tried before the forms; when it moves the model so far that
-    # the caller refits the round (red team 16's S1: 126 of 353 s went to forms of such rounds), the forms are
+    # the caller refits the round (the round is thrown away), the forms are
     # not fitted and its lines are said; otherwise the forms are fitted against the current model and the
     # re-anchoring runs again on their results, its refits shared through one ``done`` dict, as before the
     # shortcut.  Stand-ins: only the order of the steps is tested

@@ -689,8 +689,8 @@ class Diagnosis:
 
         The re-anchoring is tried first on the candidates in their own forms: when it moves the current model
         so far that ``refits_round(anchored)`` is true (the caller then refits every candidate from it), the
-        forms are not fitted for a round that is thrown away (red team 16's S1, torque law with a drag: 126 of
-        its 353 s went to forms of candidates refitted afterwards).  Otherwise the forms are fitted against the
+        forms are not fitted for a round that is thrown away (pair:torque_friction_law+kiln_unbalance/s1 alone
+        on two cores: 89 s against 126 s, the same result).  Otherwise the forms are fitted against the
         current model as before and the re-anchoring runs again on the results (the refits of the current
         structure it already made are reused), so the outcome is the one without this shortcut.
         """
