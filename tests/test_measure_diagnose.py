@@ -439,7 +439,7 @@ def test_the_coupling_form_may_end_rigid_but_not_at_its_other_bounds(k_c, c_c, p
     # upper bound, under 5 % of ln(1e5) = 11.5 (0.58); 1.1e4 lies 0.10 above the lower; 9.9e5 0.01 below the
     # upper; 1.2 0.18 above the lower (5 % of ln(1e6) is 0.69).  A rigid link is what a plant without an
     # elastomeric coupling has, so only the soft and the undamped ends mark the form as a stand-in
-    from kilnctl.measure.diagnose import _pinned
+    from kilnctl.measure.checks import _pinned
     from kilnctl.measure.effects import CATALOGUE
 
     form = CATALOGUE["backlash"].form("coupling")

@@ -179,7 +179,8 @@ def test_a_form_at_its_bound_at_the_final_fit_goes_back_to_the_effects_own_form(
     import math
     from types import SimpleNamespace
 
-    from kilnctl.measure.diagnose import FORM_BOUND, Diagnosis
+    from kilnctl.measure.checks import FORM_BOUND
+    from kilnctl.measure.diagnose import Diagnosis
 
     fp = CATALOGUE["speed_sensor_lag"].form("second_order").parameters[0]
     assert (fp.lower, fp.upper, fp.kind) == (0.3, 10.0, "log")
