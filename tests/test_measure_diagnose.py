@@ -1133,6 +1133,7 @@ def test_final_check_removes_an_effect_that_another_effects_other_form_replaces(
     d._calibrate = calibrate
     d._evidence = lambda m, e, cal, without, *a: CandidateResult(e, cal.bic_ - without.bic_, 0.0, {}, {}, {}, [],
                                                                  [], True, "", 0.0)
+    d._offset_at_rest = lambda *a: None  # no record here: the current at rest is not weighed
     selected, kept, dropped = d._final_check(None, SETUP, ["kiln_unbalance", "motor_coulomb_friction"], final,
                                              None, None, None, None, lambda s: None)
     # each effect checked with the others in their own form, and each of the others in its other forms too (the
@@ -1604,3 +1605,44 @@ def test_re_anchoring_twice_on_a_round_refits_the_structure_once():
         model, results = d._reanchor(None, SETUP, [], current, [cand], None, None, None, None, lambda s: None, done)
         assert model is refit and not results[0].supported
     assert starts == [{"mu_c": 0.45}]
+
+
+@pytest.mark.parametrize("offset, T_cm_amps, fires", [(0.8, 0.95, True), (0.0, 0.95, False), (0.8, 10.0, False)])
+def test_a_friction_whose_current_the_record_shows_at_rest_is_a_sensor_offset(offset, T_cm_amps, fires):
+    """Red team 18's N2: no effect, a current sensor 0.8 A off; a motor friction of 0.95 A (3.0 N m) was
+    selected.  Truth by construction: 75 samples at rest (white noise of 1.5 A) with the given offset put before
+    a synthetic start-up whose model current is known (the stand-in final model reproduces it, so the residual
+    is the added noise), and a friction adding ``T_cm_amps`` in motion; the decision worked out by hand from the
+    samples' mean m and standard error s: 2 ln LR = (m^2 - (m - c)^2) / s^2 > 2 with |m| > 2 s.  A friction of
+    10 A with the current at 0.8 A at rest: nearer zero than 10 A, so the friction stays."""
+    from kilnctl.measure.checks import REST_EVIDENCE
+    from kilnctl.measure.io import Measurement
+    from kilnctl.simulate import resolve_gains
+
+    m, _ = make_record((), seed=3, t_end=12.0)
+    rng = np.random.default_rng(11)
+    n_rest, dt = 75, m.t[1] - m.t[0]
+    rest = rng.normal(offset, 1.5, n_rest)
+    noise = rng.normal(0.0, 1.5, m.t.size)
+    cur = np.concatenate([rest, m.current + offset + noise])
+    spd = np.concatenate([np.zeros(n_rest), m.speed])
+    ref = np.concatenate([np.zeros(n_rest), m.speed_ref])
+    t = np.concatenate([np.arange(n_rest) * dt, m.t + n_rest * dt])
+    rec = Measurement.from_arrays(t, cur, spd, ref)
+    params = resolve_gains(SETUP)
+    exp = rec.experiment(params)
+    active = rec.t >= exp.t0 - 1e-9
+    final = SimpleNamespace(values_={"T_cm": T_cm_amps * params.k_i}, params_=params,
+                            run_=SimpleNamespace(outputs={"current_A": rec.current[active] - noise[-active.sum():]}))
+    d = Diagnosis(SETUP)
+    text = d._offset_at_rest("motor_coulomb_friction", final, rec, exp)
+    at_rest = (rec.t < exp.t0 - 0.05)
+    x = float(np.mean(rec.current[at_rest]))
+    s = 1.5 / math.sqrt(at_rest.sum())  # white noise; the code's estimate allows for correlation, about this
+    lr2 = (x ** 2 - (x - T_cm_amps) ** 2) / s ** 2
+    assert (lr2 > REST_EVIDENCE and abs(x) > 2 * s) == fires  # the hand decision
+    assert (text is not None) == fires
+    if fires:
+        assert f"reads {x:+.2f} A" in text and f"adds {T_cm_amps:+.2f} A" in text and "sensor offset" in text
+    d._forms = {"motor_coulomb_friction": "falling"}  # a falling friction is no constant current: not weighed
+    assert d._offset_at_rest("motor_coulomb_friction", final, rec, exp) is None

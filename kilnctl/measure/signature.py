@@ -19,7 +19,7 @@ from .io import Measurement
 from .runner import kiln_angle
 from .stats import best_step, median_step, robust_sigma
 
-__all__ = ["residual_signature", "standstill_offsets", "window_mean_spread", "fit_points", "NARROWBAND_RATIO",
+__all__ = ["residual_signature", "standstill_offsets", "rest_level", "window_mean_spread", "fit_points", "NARROWBAND_RATIO",
            "EVENT_TIMING_S", "MATERIAL_FIT_POINTS", "SPEED_APART_S", "RAMP_SLOPE", "MIN_WINDOWS", "spectral_line",
            "LINE_RATIO", "LINE_PERIODS"]
 
@@ -110,17 +110,12 @@ def standstill_offsets(m: Measurement, exp, *, min_samples: int = 10, residuals:
     turning = _turning_before(m, exp, before, min_samples)
     if turning is not None:
         out.append(turning)
-    rest = before & (np.abs(m.speed) < 0.01 * max(abs(exp.omega_ref), 1e-9))
-    n = int(rest.sum())
-    if n < min_samples:
-        return out
     for c, unit, what in (("current_A", "A", "current"), ("speed_rpm", "rpm", "speed")):
-        x = m.channels[c][rest]
-        med = float(np.median(x))
-        sig = robust_sigma(x - med)
-        se = sig * math.sqrt(variance_inflation(x - med) / n) if sig > 0 else 0.0
-        if residuals is not None and c in residuals:
-            se = max(se, window_mean_spread(residuals[c], n))
+        level = rest_level(m, exp, c, residual=None if residuals is None else residuals.get(c),
+                           min_samples=min_samples)
+        if level is None:
+            return out
+        med, sig, se, n = level["median"], level["sigma"], level["se"], level["n_samples"]
         peak = float(np.max(np.abs(m.channels[c])))
         if abs(med) > 5.0 * se and abs(med) > 0.005 * peak:
             out.append({"channel": c, "offset": med, "n_samples": n,
@@ -128,6 +123,47 @@ def standstill_offsets(m: Measurement, exp, *, min_samples: int = 10, residuals:
                                  f"noise {sig:.2g} {unit}) where the model has zero: a sensor offset, or a {what} "
                                  "at rest that no catalogued effect makes")})
     return out
+
+
+def rest_level(m: Measurement, exp, channel: str = "current_A", *, residual=None, min_samples: int = 10) -> dict | None:
+    """A channel's level while the drive stands still before the start-up, with its standard error.
+
+    The samples before ``t0 - 0.05 s`` whose measured speed is below 1 % of the final reference, those the
+    reader kept (spikes and clipped samples left out).  The standard error allows for the noise's
+    autocorrelation (:func:`variance_inflation`) and, given the model's ``residual`` over the record, is at
+    least the spread of the means of as many consecutive residual samples (:func:`window_mean_spread`: noise
+    correlated over longer than the samples at rest, which they cannot show).
+
+    Parameters
+    ----------
+    m : Measurement
+        The record.
+    exp : Experiment
+        Its experiment (start ``t0`` [s], ``omega_ref`` [rpm]).
+    channel : {'current_A', 'speed_rpm'}
+        The channel.
+    residual : array_like, optional
+        The model's residual of that channel over the record (measured - model) [A or rpm].
+    min_samples : int, default 10
+        Fewer samples at rest than this: None.
+
+    Returns
+    -------
+    dict or None
+        ``mean`` and ``median`` [A or rpm], ``sigma`` (robust standard deviation of the samples), ``se`` (standard
+        error of their mean), ``n_samples``; None with too few samples at rest.
+    """
+    rest = (m.t < exp.t0 - 0.05) & (np.abs(m.speed) < 0.01 * max(abs(exp.omega_ref), 1e-9)) & m.kept
+    n = int(rest.sum())
+    if n < min_samples:
+        return None
+    x = m.channels[channel][rest]
+    med = float(np.median(x))
+    sig = robust_sigma(x - med)
+    se = sig * math.sqrt(variance_inflation(x - med) / n) if sig > 0 else 0.0
+    if residual is not None:
+        se = max(se, window_mean_spread(residual, n))
+    return {"mean": float(np.mean(x)), "median": med, "sigma": sig, "se": se, "n_samples": n}
 
 
 def _turning_before(m: Measurement, exp, before, min_samples: int) -> dict | None:

@@ -260,6 +260,13 @@ class Effect:
         and a refit under stick-slip is also started with the burden moved
         to keep the current at the set speed (see
         :meth:`~kilnctl.measure.diagnose.Diagnosis._restart_at_load`).
+    offset_in_motion : callable or None
+        ``offset_in_motion(values, params) -> float``: the constant current
+        [A] the effect adds as soon as the motor turns and not at rest (a
+        motor friction's T_cm/k_i), which a current-sensor offset adds at
+        rest too.  The final check then weighs the record's current at rest
+        (:meth:`~kilnctl.measure.checks.SelectionChecks._offset_at_rest`).
+        None: the effect's current is not such a constant.
     null : dict or None
         Values of its parameters at which the effect vanishes (or nearly:
         a lag of 0.1 ms), so that the structure with it contains the one
@@ -291,6 +298,7 @@ class Effect:
     forms: tuple = ()
     scale: Callable | None = field(repr=False, default=None)
     steady_load: bool = False
+    offset_in_motion: Callable | None = field(repr=False, default=None)
 
     def usual(self, name: str, params: Parameters | None = None) -> tuple[float, float]:
         """The usual range of parameter ``name`` [its unit] for the drive of ``params`` (Table 1's without).

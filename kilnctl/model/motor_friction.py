@@ -91,6 +91,7 @@ class MotorCoulombFriction(Component):
             "starts a little late, once the current has reached T_cm/k_i",
             starts=lambda params, m: [{"T_cm": 20.0}, {"T_cm": 60.0}, {"T_cm": 200.0}],
             plausible={"T_cm": (10.0, 100.0)}, null={"T_cm": 0.0}, scale=motor_torque_scale, steady_load=True,
+            offset_in_motion=lambda values, params: values["T_cm"] / params.k_i,
             notes="a friction that falls with the speed (support rollers or bearings lifting onto their oil film) "
                   "is its 'falling' form, tried in each round where it is supported: on one set speed a constant "
                   "friction and a lighter burden, or a falling friction and a heavier one, draw the same steady "
