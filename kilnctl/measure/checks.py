@@ -354,10 +354,10 @@ class SelectionChecks:
         start tell them apart, which the fits leave out (the model starts there).  The offset reads the same at
         rest, the friction reads zero.  With the current's level at rest
         (:func:`~kilnctl.measure.signature.rest_level`, its standard error at least the spread of the final
-        residual's means over as many samples)
-        the two explanations, of equal size and of the same number of parameters, are weighed by their
-        likelihood ratio; the offset is the better when that ratio exceeds e (2 ln LR > 2, "positive" evidence
-        on Kass and Raftery's scale) and the level lies more than two standard errors from zero.  Red team 18's
+        residual's means over as many samples) the two explanations, of equal size and of the same number of
+        parameters, are weighed by their likelihood ratio; the offset is the better when that ratio exceeds e
+        (2 ln LR > :data:`REST_EVIDENCE`, "positive" evidence on Kass and Raftery's scale) and the level lies
+        more than two standard errors from zero.  Red team 18's
         N2 (no effect; a current sensor reading 1 % high and 0.8 A off, 73 samples at rest): a motor friction
         of 3.0 N*m (0.95 A) was selected (dBIC -85.6); the current at rest reads 0.71 +- 0.22 A, 2 ln LR 9.2."""
         eff = CATALOGUE[e]
