@@ -63,7 +63,7 @@ from .io import Measurement
 from .checks import SelectionChecks, _pinned
 from .evidence import STICK_SLIP_FALL, CandidateResult, judge
 from .oscillation import dominant_oscillation
-from .outside import CurrentDrift, CurrentPulse, CurrentStep
+from .outside import CurrentDrift, CurrentStep
 from .refit import PAIRED, CandidateRefits, _falls, _far, _torque_law_starts
 from .runner import CHANNELS
 from .signature import residual_signature, standstill_offsets
@@ -918,10 +918,6 @@ class Diagnosis(CandidateRefits, SelectionChecks):
           values.  The current structure is refitted with a step b H(t - tau) of the current added (tau from
           1.5 s after the ramp's end to 2 s before the record's end; b and tau in closed form at every trial,
           :class:`~kilnctl.measure.outside.CurrentStep`).
-        - A change that comes and goes: the same with a pulse b (H(t - t_on) - H(t - t_off)), both edges in that
-          window and at least 1 s apart (:class:`~kilnctl.measure.outside.CurrentPulse`).  Red team 18's X1, a
-          load of 1.1e5 N m that built up at 21 s and slumped at 30 s: a kiln unbalance of 1.1e5 N m took its
-          place (whitened dBIC +18.8), and the one step left in the residual explained 12 % of it.
         - A slow drift, when the best supported candidate (or, with none supported, the best that the plain
           tests support: then the drift alone is tried) is periodic (a kiln unbalance) and the record lasts
           at least its period: a current-sensor offset drifting as the electronics warm up was taken for a
@@ -939,8 +935,7 @@ class Diagnosis(CandidateRefits, SelectionChecks):
         Returns
         -------
         dict or None
-            ``kind`` ("step", "pulse" or "drift"), the term's values (a step: ``t`` [s], ``size_A`` [A]; a pulse:
-            ``t`` and ``t_end`` [s], ``size_A`` [A]; a drift:
+            ``kind`` ("step" or "drift"), the term's values (a step: ``t`` [s], ``size_A`` [A]; a drift:
             ``rate_A_per_s``, ``offset_A``, ``t_start`` and ``t_end`` [s]), ``delta_bic`` and ``text``, when it
             wins; else None.
         """
@@ -960,7 +955,6 @@ class Diagnosis(CandidateRefits, SelectionChecks):
         # 4 A step into the noise of a benchmark record (mag:second_motor_4/s1) and flagged it
         if window[1] > window[0] and supported:
             terms.append(CurrentStep(window))
-            terms.append(CurrentPulse(window))
         eff = CATALOGUE.get(best.effect)
         if eff is not None and eff.period is not None and float(t[-1] - exp.t0) >= eff.period(params, exp.omega_ref):
             terms.append(CurrentDrift())
@@ -978,7 +972,7 @@ class Diagnosis(CandidateRefits, SelectionChecks):
                 continue
             if cal.outside_ is None:
                 continue
-            label = {"step": "abrupt change", "pulse": "change that comes and goes"}.get(term.kind, "slow drift")
+            label = "abrupt change" if term.kind == "step" else "slow drift"
             r = self._evidence(m, label, cal, current, scales, train, test, exp, time.perf_counter() - t_start,
                                slow_change=True)
             # a change outside the catalogue is the stronger claim (no effect of it explains the record): it wins
@@ -1010,9 +1004,6 @@ class Diagnosis(CandidateRefits, SelectionChecks):
         if term.kind == "step":
             values = {"t": fitted["t"], "size_A": fitted["size"]}
             where = f"abrupt change at t = {fitted['t']:.1f} s"
-        elif term.kind == "pulse":
-            values = {"t": fitted["t"], "t_end": fitted["t_end"], "size_A": fitted["size"]}
-            where = f"change from t = {fitted['t']:.1f} to {fitted['t_end']:.1f} s"
         else:
             values = {"rate_A_per_s": fitted["rate"], "offset_A": fitted["offset"], "t_start": fitted["t_start"],
                       "t_end": fitted["t_end"]}

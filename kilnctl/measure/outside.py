@@ -6,8 +6,6 @@ is fitted to the current's residual on the fitted samples by linear least square
 it adds no parameter to the search, and counts as :attr:`n_params` parameters in the BIC.
 
 - :class:`CurrentStep`: b H(t - tau), an abrupt change (a load step, a process upset, a sensor fault);
-- :class:`CurrentPulse`: b (H(t - t_on) - H(t - t_off)), a change that comes and goes (a load that builds up
-  and slumps, a process upset that passes);
 - :class:`CurrentDrift`: a + b (t - t_start), a straight-line drift of the logged current over the whole
   record (a current-sensor offset or gain drifting as the electronics warm up).
 
@@ -21,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .stats import best_pulse, best_step
+from .stats import best_step
 
 
 @dataclass(frozen=True)
@@ -55,44 +53,6 @@ class CurrentStep:
         return (f"an abrupt change at t = {fitted['t']:.1f} s: the current steps by {fitted['size']:+.0f} A while "
                 "the drive runs at its set speed, which no catalogued effect does (a load step, a process upset, a "
                 "sensor fault)")
-
-
-@dataclass(frozen=True)
-class CurrentPulse:
-    """A change b (H(t - t_on) - H(t - t_off)) of the current that comes and goes, both edges within ``window``.
-
-    Parameters
-    ----------
-    window : (float, float)
-        Earliest rise and latest fall tried [s] (record time).
-    min_width : float, default 1.0
-        Shortest pulse tried [s]: a shorter one is a local failure, which the residual's signature names.
-    """
-
-    window: tuple
-    min_width: float = 1.0
-
-    kind = "pulse"
-    n_params = 3  # b, t_on and t_off
-
-    def fit(self, t, e) -> dict | None:
-        """The best pulse of the residual ``e`` [A] at times ``t`` [s] (zero outside it), or None when none
-        fits the window (:func:`~kilnctl.measure.stats.best_pulse`)."""
-        pulse = best_pulse(t, e, t_min=self.window[0], t_max=self.window[1], min_width=self.min_width)
-        return None if pulse is None else dict(pulse, kind=self.kind)
-
-    def shape(self, t, fitted) -> np.ndarray:
-        """The pulse, in A, at times ``t`` [s]."""
-        t = np.asarray(t, float)
-        return fitted["size"] * ((t >= fitted["t"]) & (t < fitted["t_end"]))
-
-    @staticmethod
-    def text(fitted) -> str:
-        """The pulse for a report."""
-        return (f"a change that comes and goes from t = {fitted['t']:.1f} s to {fitted['t_end']:.1f} s: the current "
-                f"moves by {fitted['size']:+.0f} A while the drive runs at its set speed and comes back, which no "
-                "catalogued effect does (a load that builds up and slumps, a process upset that passes, a sensor "
-                "fault)")
 
 
 @dataclass(frozen=True)
