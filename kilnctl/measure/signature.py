@@ -19,9 +19,9 @@ from .io import Measurement
 from .runner import kiln_angle
 from .stats import best_step, median_step, robust_sigma
 
-__all__ = ["residual_signature", "standstill_offsets", "rest_level", "window_mean_spread", "fit_points", "NARROWBAND_RATIO",
-           "EVENT_TIMING_S", "MATERIAL_FIT_POINTS", "SPEED_APART_S", "RAMP_SLOPE", "MIN_WINDOWS", "spectral_line",
-           "LINE_RATIO", "LINE_PERIODS"]
+__all__ = ["residual_signature", "standstill_offsets", "rest_level", "window_mean_spread", "fit_points",
+           "NARROWBAND_RATIO", "EVENT_TIMING_S", "MATERIAL_FIT_POINTS", "SPEED_APART_S", "RAMP_SLOPE", "MIN_WINDOWS",
+           "spectral_line", "LINE_RATIO", "LINE_PERIODS"]
 
 #: a residual spectral peak this many times its neighbours is an oscillation the model misses
 NARROWBAND_RATIO = 10.0
