@@ -23,6 +23,9 @@ __all__ = ["residual_signature", "standstill_offsets", "rest_level", "window_mea
            "NARROWBAND_RATIO", "EVENT_TIMING_S", "MATERIAL_FIT_POINTS", "SPEED_APART_S", "RAMP_SLOPE", "MIN_WINDOWS",
            "spectral_line", "LINE_RATIO", "LINE_PERIODS"]
 
+#: the samples at rest end this long before the start-up's t0 [s], and their measured speed is below this
+#: fraction of the set speed [-] (see rest_level, standstill_offsets)
+REST_GUARD_S, REST_SPEED = 0.05, 0.01
 #: a residual spectral peak this many times its neighbours is an oscillation the model misses
 NARROWBAND_RATIO = 10.0
 #: a brief residual excursion that a time shift of the model's signal by at most this [s] removes is an event
@@ -105,7 +108,7 @@ def standstill_offsets(m: Measurement, exp, *, min_samples: int = 10, residuals:
         Per offset channel: ``channel``, ``offset`` [A or rpm], ``n_samples``, ``text`` (and ``turning`` True for
         a kiln turning before the start).
     """
-    before = m.t < exp.t0 - 0.05
+    before = m.t < exp.t0 - REST_GUARD_S
     out = []
     turning = _turning_before(m, exp, before, min_samples)
     if turning is not None:
@@ -153,7 +156,7 @@ def rest_level(m: Measurement, exp, channel: str = "current_A", *, residual=None
         ``mean`` and ``median`` [A or rpm], ``sigma`` (robust standard deviation of the samples), ``se`` (standard
         error of their mean), ``n_samples``; None with too few samples at rest.
     """
-    rest = (m.t < exp.t0 - 0.05) & (np.abs(m.speed) < 0.01 * max(abs(exp.omega_ref), 1e-9)) & m.kept
+    rest = (m.t < exp.t0 - REST_GUARD_S) & (np.abs(m.speed) < REST_SPEED * max(abs(exp.omega_ref), 1e-9)) & m.kept
     n = int(rest.sum())
     if n < min_samples:
         return None
@@ -175,7 +178,7 @@ def _turning_before(m: Measurement, exp, before, min_samples: int) -> dict | Non
     if n < min_samples:
         return None
     w = m.speed[before]
-    level = 0.01 * max(abs(exp.omega_ref), 1e-9)
+    level = REST_SPEED * max(abs(exp.omega_ref), 1e-9)
     if np.mean(np.abs(w) >= level) < 0.5:
         return None
     med = float(np.median(w))
