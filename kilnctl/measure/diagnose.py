@@ -312,9 +312,10 @@ class Diagnosis(CandidateRefits, SelectionChecks):
 
     def _calibrate(self, m, params, effects, scales, mask, init, starts=(), experiment=None,
                    first_failure=None, new_effect=None, n_local=None, full_schedule=False, screen=1,
-                   spread=None) -> Calibration:
+                   spread=None, outside=None) -> Calibration:
         model, comps, p, free = self._structure(params, effects)
-        cal = Calibration(p, free, model=model, effects=comps, scales=scales, t0=self.t0, max_nfev=self.max_nfev)
+        cal = Calibration(p, free, model=model, effects=comps, scales=scales, t0=self.t0, max_nfev=self.max_nfev,
+                          outside=outside)
         horizons, smoothing, sep = _schedule(self._cyclic(effects), first_failure, new_effect, full_schedule)
         if n_local is None:
             n_local = self.n_local if new_effect else 1
@@ -579,6 +580,10 @@ class Diagnosis(CandidateRefits, SelectionChecks):
         final, form_notes = self._final_forms(m, params, tuple(selected), final, exp, say)
         selected, final, dropped = self._final_check(m, params, selected, final, scales, train, test, exp, say,
                                                      pool)
+        if self.outside_change_ is None:
+            selected, final, pulsed, self.outside_change_ = self._final_pulse(m, params, selected, final, scales,
+                                                                              train, test, exp, say)
+            dropped = dropped + pulsed
         self.swaps_ = {k: v for k, v in self.swaps_.items() if k in selected}
         self.forms_ = {e: f for e, f in self._forms.items() if e in selected}
         self.stick_slip_ = self._rugged(tuple(selected))
