@@ -1251,6 +1251,22 @@ def test_final_check_refits_the_others_and_removes_an_effect_they_replace(tmp_pa
     assert refit.bic_ < final.bic_ and "J_m2" not in refit.values_
 
 
+@pytest.mark.parametrize("mu_s, cycles", [(0.51, False), (0.62, False), (0.67, True), (0.80, True)])
+def test_a_setup_whose_paper_law_makes_stick_slip_cycles_is_searched_as_one_with_cycles(mu_s, cycles):
+    # truth (hand, the paper's friction law; red team 19's note): at the set speed the burden slides steadily when
+    # mu_s < mu_c R/L and sticks and breaks away again and again when mu_s > mu_c R/L; Table 1's mu_c R/L is
+    # 0.4 x 2.17 / 1.353 = 0.642.  The schedule of every structure then includes the torque law's (its
+    # horizons and smoothing), as when the setup states that law
+    p = SETUP.replace(mu_s=mu_s)
+    assert p.mu_c * p.R / p.L == pytest.approx(0.6415, abs=1e-4)
+    m, _ = make_record((), seed=2, params=p, t_end=30.0)
+    d = Diagnosis(p)
+    exp = m.experiment(p, t0=d.t0)
+    assert d._cycles_at_setup(m, p, exp) is cycles
+    d._setup_cycles = cycles
+    assert ("torque_friction_law" in d._cyclic(())) is cycles and d._rugged(()) is cycles
+
+
 def test_diagnosis_given_a_file_name_says_to_read_it_first():
     # truth: a file name typed by hand where the record belongs (was "'str' object has no attribute 'experiment'")
     from kilnctl.errors import ParameterError
