@@ -86,7 +86,7 @@ def test_the_base_calibration_on_n2_reaches_the_plants_own_values(n2):
     mu_s 0.55571, J_v 283440.65), and the fit kilnctl's base model reaches at them (97.1 % current).  The base
     calibration must end within 2 % of mu_s and mu_c, 1 % of m_v and 5 % of J_v, its current fit at least that
     at the truth minus 0.1 point (when written: mu_s 0.5557, mu_c 0.3357, m_v 180934, J_v 282504; 97.11 % against
-    97.12 % at the truth).  Before this session's fix (6680a4a: the base is searched as one with cycles when the
+    97.12 % at the truth).  Before the fix (6680a4a: the base is searched as one with cycles when the
     setup's paper law already makes them, ``Diagnosis._cycles_at_setup``) the base search ended at mu_s 0.38, in
     the valley of steady sliding, at 90.8 % against the truth's 97.1 % (still so with ``d._setup_cycles =
     False``: mu_s 0.385, J_v 4.2e5, 90.78 %)."""
