@@ -403,10 +403,12 @@ def judge(m, name, cal, current, scales, train, test, exp, wall_s, *, min_delta_
         part of a slow change for coloured noise).
     stick_slip : bool
         The current model has self-sustained stick-slip cycles (the torque
-        friction law): where it fits within noise, a refit that predicts the
-        held-out part worse is supported only when BIC with the coloured noise
-        modelled falls by more than :data:`STICK_SLIP_FALL` times
-        ``min_delta_bic``.
+        friction law, or the paper's law where mu_s exceeds mu_c R/L): where it
+        fits within noise, a refit that predicts the held-out part worse is
+        supported only when BIC with the coloured noise modelled falls by more
+        than :data:`STICK_SLIP_FALL` times ``min_delta_bic``; and a refit that
+        lowers it by that much is not refused for predicting the held-out
+        part significantly worse.
 
     Returns
     -------
@@ -468,8 +470,15 @@ def judge(m, name, cal, current, scales, train, test, exp, wall_s, *, min_delta_
     # not significantly worse on the held-out part (in standard errors that allow for its autocorrelation):
     # a stick-slip structure fitted on the fitting blocks can predict the held-out blocks' breakaways a
     # sample off, which doubles their squared error without being evidence against it (the torque friction
-    # law on a torque law + compliance record: -112 %, -1.6 standard errors, and needed)
-    ok_robust = dbic_corr < -min_delta_bic and gain_z > -min_holdout_z
+    # law on a torque law + compliance record: -112 %, -1.6 standard errors, and needed).  Where the current
+    # model has stick-slip cycles, a refit that lowers BIC with the coloured noise modelled by more than
+    # STICK_SLIP_FALL times the threshold (the bar the cycles' rule below sets for a held-out part predicted
+    # worse) is not refused for it, however many standard errors: red team 19's backlash (a kiln whose paper law
+    # cycles; 10 mm of play, the impact 250 A above the model's current) lowered it by 4499 and was refused at
+    # -12.8 %, -2.5 standard errors, the cycles of the held-out blocks a sample off.  In the whole set's run
+    # (diagnose_all_s40.json) no candidate refused so had a whitened dBIC below -50 but one, which BIC refused
+    ok_robust = dbic_corr < -min_delta_bic and (gain_z > -min_holdout_z
+                                                or (stick_slip and dbic_corr < -STICK_SLIP_FALL * min_delta_bic))
     # ... but where the current model has stick-slip cycles and fits within noise, the cycles' phase over the
     # record moves with every parameter, as a hunting loop's does (below), and a refit with any added parameter
     # can tune it.  Refits that did only that (the effect left at its null value, the base moved to another
