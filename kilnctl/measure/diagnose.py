@@ -1062,7 +1062,13 @@ class Diagnosis(CandidateRefits, SelectionChecks):
         the lag's own refit about the current model's values had ended at its null value (dBIC -10); the torque
         law alone refitted from the stand-in's base values fell from cost 705 to 404, and the round refitted
         from there found the lag.  When a stand-in's base values do not help, the supported candidates are
-        tried as before.
+        tried as before.  When the best supported candidate's base values do not help either, the others
+        within ``min_delta_bic`` of its dBIC are tried too: a candidate that changes the structure itself (the
+        torque friction law) cannot lend its values to the current one, while a rival about as good may show
+        that the gain was the current structure's.  Red team 19's E2 (a converter's current limit, found in
+        the first round): in the second round seven candidates gained dBIC -62 to -221, the torque law most,
+        a speed-sensor lag at its null value -220 by moving the limiter's gains, and the torque law was
+        selected beside the limit.
 
         ``done`` ({(current model's id, starting values): refit}) keeps the refits of the current structure made
         here for a later call on the same round.
@@ -1074,6 +1080,7 @@ class Diagnosis(CandidateRefits, SelectionChecks):
         """
         done = {} if done is None else done
         tried = set()
+        lead = None  # dBIC of the first supported candidate whose base values did not help
         while True:
             stand = min((r for r in results if r.stand_in and r.effect not in tried and
                          not any(s.supported and s.delta_bic <= r.delta_bic for s in results)),
@@ -1096,7 +1103,13 @@ class Diagnosis(CandidateRefits, SelectionChecks):
             if again.cost_ >= current.cost_ * (1 - REANCHOR_GAIN):
                 if best is stand:  # a stand-in's base values do not help: the supported candidates next
                     continue
-                # the structure cannot reach the candidate's fit: the effect earns its gain
+                if lead is None:
+                    lead = best.delta_bic
+                # the structure cannot reach the candidate's fit: the effect earns its gain, unless a rival
+                # about as good (within the BIC threshold) shows that the structure can reach it from its values
+                if any(r.supported and r.effect not in tried and r.delta_bic <= lead + self.min_delta_bic
+                       for r in results):
+                    continue
                 return current, results
             say(f"  the current model fits better from {best.effect}'s base values "
                 f"(cost {current.cost_:.5g} -> {again.cost_:.5g}): candidates judged again")
