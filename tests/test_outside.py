@@ -77,3 +77,28 @@ def test_a_pulse_is_found_where_it_was_built_and_not_shorter_than_its_least_widt
     assert "from t = 21.0 s to 30.0 s" in CurrentPulse.text(dict(fitted, t=21.0, t_end=30.0))
     # a window narrower than the least width holds no pulse
     assert CurrentPulse((20.0, 20.5)).fit(t, e) is None
+
+
+def test_a_pulse_is_abrupt_only_where_its_edges_jump_above_the_records_own_noise():
+    # truth by construction: (a) the residual is a 40 A pulse from 21 to 30 s in white noise of 2 A: across each
+    # edge a second's mean jumps by the whole height, and the spread of such jumps elsewhere is 2 x sqrt(2/50)
+    # = 0.4 A; (b) a smooth arc of the same height (half a sine from 13 to 33 s, as a kiln unbalance over part of
+    # a turn) has a best pulse too, but a second's mean changes across its edges by a few A; (c) the 40 A pulse in
+    # noise whose second-long means move by about 20 A anyway (AR(1) of 2 s, 40 A standard deviation): the
+    # half-height is not three times the spread of the record's own jumps
+    t = np.arange(0.0, 45.0, 0.02)
+    rng = np.random.default_rng(11)
+    box = 40.0 * ((t >= 21.0) & (t < 30.0))
+    arc = 40.0 * np.clip(np.sin(np.pi * (t - 13.0) / 20.0), 0.0, None) * ((t >= 13.0) & (t < 33.0))
+    term = CurrentPulse((8.0, 43.0))
+    e = box + rng.normal(0.0, 2.0, t.size)
+    assert term.abrupt(t, e, term.fit(t, e))
+    e = arc + rng.normal(0.0, 2.0, t.size)
+    fitted = term.fit(t, e)
+    assert fitted["size"] > 20.0 and not term.abrupt(t, e, fitted)
+    phi = np.exp(-0.02 / 2.0)
+    w = np.zeros(t.size)
+    for k in range(1, t.size):
+        w[k] = phi * w[k - 1] + 40.0 * np.sqrt(1.0 - phi ** 2) * rng.standard_normal()
+    e = box + w
+    assert not term.abrupt(t, e, dict(t=21.0, t_end=30.0, size=40.0))
