@@ -980,6 +980,23 @@ def test_the_caution_on_base_values_far_from_the_setup_reads_for_two_values():
     assert "motors" not in text
 
 
+@pytest.mark.parametrize("stick_slip", [True, False])
+def test_a_static_friction_far_from_the_setup_is_named_where_the_model_has_stick_slip_cycles(stick_slip):
+    # truth: constructed final values, red team 19's P1 (mu_s 0.89 against the setup's 0.57, the paper law
+    # imitating the plant's torque law); the rest at the setup's.  With stick-slip cycles in the final model mu_s
+    # sets every breakaway and is named (56 % above); without them it is fitted loosely and left out
+    p = SETUP.replace(mu_s=0.57)
+    d = Diagnosis(p, calibrate=("mu_c", "mu_s", "m_v", "J_v"))
+    d.stick_slip_ = stick_slip
+    d.final_calibration_ = SimpleNamespace(values_={"mu_c": p.mu_c, "mu_s": 0.8903, "m_v": p.m_v, "J_v": p.J_v})
+    texts = drift_texts(d, p)
+    if stick_slip:
+        (text,) = texts
+        assert "The final model's mu_s = 0.89 lies 56 % above the setup's (0.57)." in text
+    else:
+        assert texts == []
+
+
 def test_a_burden_at_half_the_setups_points_to_a_drive_of_two_motors():
     # truth: red team 10's dual drive (two powered motors, one motor's current logged, one motor's nameplate in
     # the setup): its burden calibrated to m_v 49 % and J_v 48 % below the setup's, as the fold predicts (1/2)

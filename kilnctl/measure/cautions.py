@@ -28,7 +28,8 @@ __all__ = ["setup_cautions", "effect_cautions", "drift_texts", "removed_texts", 
            "skew_texts", "best_shift", "DRIFT_CHECKED", "SETUP_DRIFT", "SKEW_MAX_S", "SKEW_GAIN"]
 
 #: the final model's base values checked against the setup's, and the fraction [-] beyond which a caution says
-#: so (mu_s is left out: outside stick-slip only the breakaway shows it, and it is fitted loosely)
+#: so (mu_s is left out: outside stick-slip only the breakaway shows it, and it is fitted loosely; with
+#: stick-slip cycles in the final model it sets every breakaway and is checked too, see drift_texts)
 DRIFT_CHECKED, SETUP_DRIFT = ("mu_c", "m_v", "J_v"), 0.25
 
 
@@ -282,6 +283,7 @@ def drift_texts(d, params) -> list[str]:
     """A caution when the final model's friction, burden mass or kiln inertia lies more than
     :data:`SETUP_DRIFT` from the setup's value: the calibration may have made up for a difference the
     catalogue lacks (a motor constant falling with speed raises the current as a heavier burden does).
+    Where the final model has stick-slip cycles (``d.stick_slip_``) the static friction mu_s is checked too.
 
     Parameters
     ----------
@@ -297,7 +299,11 @@ def drift_texts(d, params) -> list[str]:
     """
     setup = {k: float(params[k]) for k in d.calibrate}
     final = d.final_calibration_.values_
-    far = [(k, final[k], setup[k]) for k in DRIFT_CHECKED
+    # with stick-slip cycles mu_s sets every breakaway: red team 19's P1 (a kiln that cycles under both laws, the
+    # plant's law the torque law) ended with the paper law at mu_s 0.89 for the setup's 0.57, which imitated the
+    # torque law's cycles, and nothing said so
+    checked = DRIFT_CHECKED + (("mu_s",) if getattr(d, "stick_slip_", False) else ())
+    far = [(k, final[k], setup[k]) for k in checked
            if k in final and k in setup and setup[k] > 0 and abs(final[k] / setup[k] - 1.0) > SETUP_DRIFT]
     if not far:
         return []
