@@ -233,6 +233,32 @@ def test_headline_with_nothing_selected_gives_the_final_fit():
     assert "first calibration" not in report.diagnosis_headline(diag(97.0, 97.02))
 
 
+def test_headline_when_a_change_outside_the_catalogue_replaced_the_only_effect():
+    # truth: hand-built diagnosis with red team 18's X1 numbers (its report at d35bc3e): a kiln unbalance passed
+    # both tests and was selected, then the final check replaced it by a pulse of +42 A; the base at the values
+    # fitted beside the pulse fits 87.4 %, the base calibrated through it 89.2 %.  The headline had said "none of
+    # the 9 candidates passed both tests" and "the search found the same model a better optimum"
+    pulse = {"kind": "pulse", "t": 21.0, "t_end": 30.0, "size_A": 42.0}
+    hint = "a change that comes and goes from t = 21.0 s to 30.0 s: the current moves by +42 A"
+    d = SimpleNamespace(selected_=[], baseline_={"current_A": 89.2}, final_={"current_A": 87.4}, ranking_=[None] * 9,
+                        unexplained_={"hint": hint}, outside_change_=pulse,
+                        removed_=[SimpleNamespace(effect="kiln_unbalance")])
+    plain = report.diagnosis_plain_headline(d)
+    assert "passed both tests" not in plain and "better optimum" not in plain
+    assert plain.startswith("No catalogued effect explains what the model misses: kiln unbalance was selected and "
+                            "then removed (the reasons below); the calibrated model fits the current to 87.4 % at "
+                            "the values fitted beside the change named below (89.2 % calibrated through it")
+    assert plain.endswith(hint + ".")
+    short = report.diagnosis_headline(d)
+    assert short.startswith("no catalogued effect kept (kiln_unbalance selected, then removed); current fit 87.4 % "
+                            "with the calibrated base model at the values fitted beside the change outside the "
+                            "catalogue (89.2 % calibrated through it)")
+    # the final check removed the only effect and the refit without it fits less, no change outside: said plainly
+    d.outside_change_, d.unexplained_ = None, None
+    plain = report.diagnosis_plain_headline(d)
+    assert "fits the current to 87.4 % (the base as first calibrated: 89.2 %)" in plain
+
+
 def test_headline_with_nothing_selected_and_structure_left_does_not_say_the_record_is_explained():
     # truth: hand-built diagnoses.  Red team 6's soft backlash (90.9 %, a local failure at 2.2-6.4 s) opened with
     # "The model needs no catalogued effect to explain this record", then said the residual has structure
