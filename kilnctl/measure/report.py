@@ -1024,7 +1024,9 @@ HOW_TO_READ = {
                                  "(slow noise links the held-out blocks to their neighbours). Where the model has "
                                  "stick-slip cycles, any added parameter can shift them: a candidate that predicts "
                                  "the held-out part worse then needs the whitened dBIC to fall by "
-                                 "more than {stick_slip_dbic:g}. An effect is <b>supported</b> only when it "
+                                 "more than {stick_slip_dbic:g}, and with that fall it passes however much worse "
+                                 "(the cycles of the held-out blocks a sample off). An effect is "
+                                 "<b>supported</b> only when it "
                                  "passes both tests."),
     "cautions": ("cautions", "Where the evidence is weaker than the numbers suggest (a record shorter than the "
                              "effect's period, a strongly autocorrelated residual, evidence just past the "
