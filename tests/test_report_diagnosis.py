@@ -247,7 +247,7 @@ def test_headline_when_a_change_outside_the_catalogue_replaced_the_only_effect()
     assert "passed both tests" not in plain and "better optimum" not in plain
     assert plain.startswith("No catalogued effect explains what the model misses: kiln unbalance was selected and "
                             "then removed (the reasons below); the calibrated model fits the current to 87.4 % at "
-                            "the values fitted beside the change named below (89.2 % calibrated through it")
+                            "the values fitted beside the change named next (89.2 % calibrated through it")
     assert plain.endswith(hint + ".")
     short = report.diagnosis_headline(d)
     assert short.startswith("no catalogued effect kept (kiln_unbalance selected, then removed); current fit 87.4 % "

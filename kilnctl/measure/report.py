@@ -915,7 +915,7 @@ def diagnosis_plain_headline(d) -> str:
         if c1 >= c0 + 0.05:
             again = f" (its first calibration stopped at {c0:.1f} %; the search found the same model a better optimum)"
         elif c1 <= c0 - 0.05 and _beside_pulse(d):
-            again = (f" at the values fitted beside the change named below ({c0:.1f} % calibrated through it, "
+            again = (f" at the values fitted beside the change named next ({c0:.1f} % calibrated through it, "
                      "which the change pulls off the plant's values)")
         elif c1 <= c0 - 0.05:
             again = f" (the base as first calibrated: {c0:.1f} %)"
