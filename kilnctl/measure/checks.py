@@ -390,6 +390,7 @@ class SelectionChecks:
         term = CurrentPulse(window)
         if not periodic or window[1] - window[0] < term.min_width:
             return selected, final, [], None
+        t = m.t[active]
         won = None
         for e in periodic:
             rest = tuple(x for x in selected if x != e)
@@ -404,7 +405,6 @@ class SelectionChecks:
                 continue
             r = self._evidence(m, "change that comes and goes", cal, final, scales, train, test, exp,
                                time.perf_counter() - t_start, slow_change=True)
-            t = m.t[active]
             pulse = term.shape(t, cal.outside_)
             abrupt = term.abrupt(t, m.current[active] - (cal.run_.outputs["current_A"] - pulse), cal.outside_)
             beats = abrupt and r.delta_bic < -self.min_delta_bic and r.delta_bic_corrected < -self.min_delta_bic

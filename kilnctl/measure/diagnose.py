@@ -938,8 +938,7 @@ class Diagnosis(CandidateRefits, SelectionChecks):
         r = judge(m, name, cal, current, scales, train, test, exp, wall_s, min_delta_bic=self.min_delta_bic,
                   min_holdout_gain=self.min_holdout_gain, min_holdout_z=self.holdout_z,
                   hunting=self._cycle_in_phase(m, current, exp), slow_change=slow_change,
-                  stick_slip=getattr(current.params_, "friction_law", None) == "torque"
-                  or getattr(self, "_setup_cycles", False))
+                  stick_slip=getattr(current.params_, "friction_law", None) == "torque" or self._rugged(()))
         r.form = getattr(cal, "form_", None)  # a refit in another form of the effect (see _in_best_form)
         return r
 

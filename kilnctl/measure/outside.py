@@ -86,7 +86,8 @@ class CurrentPulse:
         t = np.asarray(t, float)
         return fitted["size"] * ((t >= fitted["t"]) & (t < fitted["t_end"]))
 
-    def abrupt(self, t, e, fitted, *, span: float = 1.0, share: float = 0.5, z: float = 3.0) -> bool:
+    @staticmethod
+    def abrupt(t, e, fitted, *, span: float = 1.0, share: float = 0.5, z: float = 3.0) -> bool:
         """True when both edges of the fitted pulse are abrupt in the residual ``e`` [A] that it was fitted to.
 
         Across each edge the residual's mean over ``span`` seconds after it differs from its mean over

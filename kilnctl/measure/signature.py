@@ -547,7 +547,7 @@ def residual_signature(comp: Comparison, n: float, steady_from: float | None = N
         out = e[~inside]
         rise = float(np.mean(e[inside]) - np.mean(out))
         se = robust_sigma(out - np.median(out)) * math.sqrt(variance_inflation(out) / max(int(inside.sum()), 1))
-        if abs(rise) > PULSE_SIGMAS * se and CurrentPulse((steady_from, t[-1])).abrupt(t, e, dict(pulse, size=rise)):
+        if abs(rise) > PULSE_SIGMAS * se and CurrentPulse.abrupt(t, e, dict(pulse, size=rise)):
             pulse_key = f"a change from t = {pulse['t']:.1f} to {pulse['t_end']:.1f} s"
             r2[pulse_key] = float(1.0 - pulse["rss"] / var)
     strongest = max(r2, key=r2.get)
