@@ -687,11 +687,12 @@ def diagnosis_headline(d) -> str:
         s = ("no catalogued effect is supported by the data" if not removed else
              f"no catalogued effect kept ({', '.join(removed)} selected, then removed)")
         s += f"; current fit {c1:.1f} % with the calibrated base model"
-        if c1 >= c0 + 0.05:
+        case = _final_against_first(d)
+        if case == "better":
             s += f" (its first calibration stopped at {c0:.1f} %)"
-        elif c1 <= c0 - 0.05 and _beside_pulse(d):
+        elif case == "beside_pulse":
             s += f" at the values fitted beside the change outside the catalogue ({c0:.1f} % calibrated through it)"
-        elif c1 <= c0 - 0.05:
+        elif case == "lower":
             s += f" (the base as first calibrated: {c0:.1f} %)"
         if d.unexplained_:
             s += f"; the residual still has structure ({d.unexplained_['hint']})"
@@ -889,10 +890,17 @@ def _effect_words(name: str) -> str:
     return name.replace("_", " ")
 
 
-def _beside_pulse(d) -> bool:
-    """True when the final model is the base evaluated at the values fitted beside a change that comes and goes
-    (see :meth:`~kilnctl.measure.checks.SelectionChecks._final_pulse`)."""
-    return (getattr(d, "outside_change_", None) or {}).get("kind") == "pulse"
+def _final_against_first(d) -> str | None:
+    """How a diagnosis' final current fit stands against the base's first calibration, for the headlines:
+    "better" (0.05 point or more above it: the search found the base a better optimum), "beside_pulse" (as much
+    below, the base evaluated at the values fitted beside a change that comes and goes, see
+    :meth:`~kilnctl.measure.checks.SelectionChecks._final_pulse`), "lower" (below for another reason), or None."""
+    c0, c1 = d.baseline_["current_A"], d.final_["current_A"]
+    if c1 >= c0 + 0.05:
+        return "better"
+    if c1 <= c0 - 0.05:
+        return "beside_pulse" if (getattr(d, "outside_change_", None) or {}).get("kind") == "pulse" else "lower"
+    return None
 
 
 def diagnosis_plain_headline(d) -> str:
@@ -912,15 +920,11 @@ def diagnosis_plain_headline(d) -> str:
         # the final model is the base structure, refitted where the search found it a better optimum, or at the
         # values fitted beside a change outside the catalogue (then it fits less than the base calibrated
         # through the change: red team 18's X1, 87.4 % against 89.2 %)
-        if c1 >= c0 + 0.05:
-            again = f" (its first calibration stopped at {c0:.1f} %; the search found the same model a better optimum)"
-        elif c1 <= c0 - 0.05 and _beside_pulse(d):
-            again = (f" at the values fitted beside the change named next ({c0:.1f} % calibrated through it, "
-                     "which the change pulls off the plant's values)")
-        elif c1 <= c0 - 0.05:
-            again = f" (the base as first calibrated: {c0:.1f} %)"
-        else:
-            again = ""
+        again = {"better": f" (its first calibration stopped at {c0:.1f} %; the search found the same model a "
+                           "better optimum)",
+                 "beside_pulse": f" at the values fitted beside the change named next ({c0:.1f} % calibrated "
+                                 "through it, which the change pulls off the plant's values)",
+                 "lower": f" (the base as first calibrated: {c0:.1f} %)"}.get(_final_against_first(d), "")
         removed = [_effect_words(r.effect) for r in getattr(d, "removed_", None) or []]
         if removed:
             first = (f"{listed(removed)} {'was' if len(removed) == 1 else 'were'} selected and then removed (the "
