@@ -133,6 +133,27 @@ def test_a_speed_that_follows_otherwise_than_modelled_is_structure():
     assert not residual_signature(compare(m0, plant), setup.n)["hint"].startswith("the measured speed departs")
 
 
+def test_a_speed_that_sags_again_and_again_is_structure():
+    """Truth by construction: the generator's record (40 s) with its measured speed sagging by 20 rpm for half a
+    second every 1.28 s after 12 s (red team 18's E2: a converter's current limiter clipping each peak of the
+    burden's oscillation, the speed 7 rpm down each time): each sag alone is too short to matter, together they
+    are a residual 12 times the speed's noise.  The noise is read from the median sample-to-sample change; the
+    RMS of the changes takes in the sags' own edges (0.87 against 0.45 rpm here) and had called it noise."""
+    from kilnctl import Parameters
+    from kilnctl.measure import Measurement, compare
+    from kilnctl.measure.signature import residual_signature
+    from kilnctl.measure.synthetic import DEFAULT_GAINS, make_record
+
+    setup = Parameters(DEFAULT_GAINS)
+    m0, truth = make_record((), seed=5, t_end=40.0)
+    plant = setup.replace(**truth["plant"])
+    sag = np.where(m0.t > 12.0, np.interp(np.mod(m0.t, 1.28), [0.0, 0.08, 0.5, 1.28], [0.0, 20.0, 0.0, 0.0]), 0.0)
+    m = Measurement.from_arrays(m0.t, m0.current, m0.speed - sag, m0.speed_ref, source="sags", params=setup)
+    sig = residual_signature(compare(m, plant), setup.n)
+    assert sig["structured"] and sig["hint"].startswith("the measured speed departs from the model's by up to"), \
+        sig["hint"]
+
+
 @pytest.mark.parametrize("stretch, story", [((12.0, 22.0), "falls behind"), ((1.0, 40.0), "does not run")])
 def test_a_speed_behind_for_a_stretch_is_a_limit_not_a_lost_start_up(stretch, story):
     """Truth by construction: the generator's record (40 s, 500 rpm) with its measured speed pulled 150 rpm
