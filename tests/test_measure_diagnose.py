@@ -1622,6 +1622,26 @@ def test_a_model_whose_speed_misses_the_record_does_not_fit_within_its_noise(mon
         assert "already fits within its noise" in r.reason
 
 
+def test_a_speed_fit_of_ninety_percent_twenty_rpm_off_is_not_within_noise():
+    """Truth by construction, with red team 20's E2 numbers (a current limit falling with speed: the kiln 20 rpm
+    below its set speed for 30 s, the speed's noise 0.13 rpm): the base model fitted the current at 95.5 % and
+    the speed at 90.5 %, and a speed fit of 90 % had counted as within noise, so the current limit (dBIC -186,
+    held-out +2.1 %) was refused for a whitened rise.  Given the speed residual, a model whose speed misses by
+    more than ten times the speed's sample-to-sample noise (and fits it below 99 %) does not fit within noise;
+    the same fits with a residual that is the noise do."""
+    from kilnctl.measure import evidence
+
+    rng = np.random.default_rng(20)
+    t = np.arange(2000) * 0.02
+    noise = 0.13 * rng.standard_normal(t.size)
+    behind = -20.0 * np.clip((t - 10.0) / 5.0, 0.0, 1.0)  # 20 rpm behind from 15 s on
+    fits = {"current_A": 95.5, "speed_rpm": 90.5}
+    assert evidence.within_noise(fits)  # the fits alone: as before
+    assert not evidence.within_noise(fits, behind + noise)
+    assert evidence.within_noise(fits, noise)
+    assert evidence.within_noise({"current_A": 95.5, "speed_rpm": 99.5}, behind + noise)  # a speed fit of 99.5 %
+
+
 @pytest.mark.parametrize("selected, times_top, said", [
     (("second_motor", "drivetrain_compliance"), 12.9, True),   # red team 16's E3: k_po 2.96e9 for a top of 2.3e8
     (("second_motor", "drivetrain_compliance"), 0.5, False),   # a stiffness a drive train has: no other place

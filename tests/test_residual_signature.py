@@ -119,7 +119,8 @@ def test_a_speed_that_follows_otherwise_than_modelled_is_structure():
     final models have a ratio of 1.5 at most)."""
     from kilnctl import Parameters
     from kilnctl.measure import Measurement, compare
-    from kilnctl.measure.signature import SPEED_EXCESS, residual_signature
+    from kilnctl.measure.evidence import SPEED_EXCESS
+    from kilnctl.measure.signature import residual_signature
     from kilnctl.measure.synthetic import DEFAULT_GAINS, make_record
 
     setup = Parameters(DEFAULT_GAINS)

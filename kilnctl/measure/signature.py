@@ -14,11 +14,11 @@ import math
 import numpy as np
 
 from .compare import Comparison
-from .evidence import variance_inflation
+from .evidence import speed_follows_otherwise, variance_inflation
 from .io import Measurement
 from .outside import CurrentPulse
 from .runner import kiln_angle
-from .stats import best_pulse, best_step, median_step, robust_sigma
+from .stats import best_pulse, best_step, median_step, noise_excess, robust_sigma
 
 __all__ = ["residual_signature", "standstill_offsets", "rest_level", "window_mean_spread", "fit_points",
            "NARROWBAND_RATIO", "EVENT_TIMING_S", "MATERIAL_FIT_POINTS", "SPEED_APART_S", "RAMP_SLOPE", "MIN_WINDOWS",
@@ -61,13 +61,6 @@ LINE_PERIODS = 3.0
 #: its reference within a few rpm, and every final model of the benchmark's 79 records fits the speed to 99.5 %
 #: or more (red team 10: a reference the model did not follow left a speed fit of -7.7 % that nothing flagged)
 SPEED_FIT_MIN = 90.0
-#: a final speed residual whose RMS is this many times its sample-to-sample noise (the robust scale of its
-#: differences over sqrt 2, :func:`~kilnctl.measure.stats.robust_sigma`) is a following error the model lacks, not the logger's noise [-] ...
-SPEED_EXCESS = 10.0
-#: ... when the speed fit is also below this [%] (the 79 benchmark records' final models fit the speed to 99.57 %
-#: or more; red team 11's cascade drive, 97.4 % with a residual of +-6 rpm, 20 times the speed's noise, had
-#: been "no structure beyond noise": the signature looked only at the current)
-SPEED_FIT_STRUCTURE = 99.0
 #: the best pulse of the residual at the set speed (a change that comes and goes) is a regressor when the
 #: residual's mean inside it differs from its mean outside by more than this many standard errors of a mean over
 #: as many samples (the robust standard deviation of the residual outside, its variance inflated by the
@@ -584,12 +577,8 @@ def residual_signature(comp: Comparison, n: float, steady_from: float | None = N
     speed_fit = comp.fit.get("speed_rpm", 100.0)
     lost = math.isfinite(speed_fit) and speed_fit < SPEED_FIT_MIN and not _follows_elsewhere(comp, apart)
     es = comp.channels["speed_rpm"].residual
-    # the noise from the median of the sample-to-sample changes: their RMS takes in the fast part of the very
-    # misfit it is to judge (red team 18's E2: sags of 7 rpm in a second raised it from 0.16 to 0.20 rpm)
-    hf = robust_sigma(np.diff(es)) / math.sqrt(2.0) if es.size > 2 else 0.0
-    excess = float(np.std(es)) / hf if hf > 0 else 0.0
-    following = (not lost and math.isfinite(speed_fit) and speed_fit < SPEED_FIT_STRUCTURE
-                 and excess > SPEED_EXCESS)
+    excess = noise_excess(es)
+    following = not lost and math.isfinite(speed_fit) and speed_follows_otherwise(speed_fit, es)
     structured = bool(correlated or peaked or fails or lost or following)
     # over fewer than two kiln turns a once-per-turn sinusoid is hardly more than a slow swing, which slowly
     # correlated noise or a drift also make (red team 12's R03: no effect, AR(1) noise of 2 s, 1.05 turns,

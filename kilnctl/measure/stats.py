@@ -19,7 +19,7 @@ import numpy as np
 
 from ..errors import ParameterError
 
-__all__ = ["fit_percent", "autocorr", "crosscorr", "residual_spectrum", "failing_intervals", "best_step",
+__all__ = ["fit_percent", "noise_excess", "autocorr", "crosscorr", "residual_spectrum", "failing_intervals", "best_step",
            "robust_sigma", "median_step", "Z99"]
 
 #: two-sided 99 % quantile of the standard normal distribution
@@ -281,6 +281,29 @@ def residual_spectrum(e, fs: float | None = None, seconds: float = 10.0, *, t=No
     return {"f": f, "psd": psd, "dominant_hz": float(f[k]),
             "peak_ratio": float(psd[k] / med) if med > 0 else math.inf,
             "narrowband_hz": float(f[kb]), "narrowband_ratio": float(best)}
+
+
+def noise_excess(e) -> float:
+    """RMS of a residual over its sample-to-sample noise: about 1 for white noise, 1/sqrt(1 - phi) for AR(1)
+    noise of coefficient phi, and large where the residual is a misfit that changes slowly against the sampling.
+
+    The noise is the robust scale of the residual's differences over sqrt 2 (:func:`robust_sigma`): their RMS
+    takes in the fast edges of the very misfit it is to judge (red team 18's E2: a speed sagging 7 rpm in a
+    second, again and again, raised it from 0.16 to 0.20 rpm).
+
+    Parameters
+    ----------
+    e : array_like
+        The residual, in time order at a constant rate.
+
+    Returns
+    -------
+    float
+        The ratio [-], 0 for fewer than three samples or a residual without sample-to-sample change.
+    """
+    e = np.asarray(e, float)
+    hf = robust_sigma(np.diff(e)) / math.sqrt(2.0) if e.size > 2 else 0.0
+    return float(np.std(e)) / hf if hf > 0 else 0.0
 
 
 def robust_sigma(e) -> float:
