@@ -561,7 +561,8 @@ def simulate(params: Parameters | None = None, model: str = "macro", t_end: floa
              effects=(), remove=(), components=None, dt: float | None = None,
              rtol: float = 1e-7, atol: float = 1e-8, event_tol: float = 1e-9,
              max_events: int = 5000, n_grid: int = 500, initial=None, initial_mode=None,
-             method: str = "auto", max_step: float | None = None, max_samples: int | None = None) -> Response:
+             method: str = "auto", max_step: float | None = None, max_samples: int | None = None,
+             held: bool = False) -> Response:
     """Simulate a start-up of the kiln drive on the nonlinear hybrid plant.
 
     Parameters
@@ -620,6 +621,11 @@ def simulate(params: Parameters | None = None, model: str = "macro", t_end: floa
         ``{"omega_kiln": 0.05}``); the others start as the components say.
     initial_mode : dict, optional
         Initial mode by component name (e.g. ``{"burden": "slip_pos"}``).
+    held : bool, default False
+        Start with the drive holding the kiln at rest (a drive switched on before the ramp, its speed loop
+        balancing the kiln's load at rest, such as an unbalance): the current and the speed controller's
+        integrator start where they hold it (:func:`kilnctl.model.rest.held_state`); ``initial`` still wins.
+        Default: from zero current, as a drive switched on with the ramp.
     max_samples : int, optional
         Largest number of output samples (``t_end/dt`` plus two per mode
         switch) the run may record; checked before anything runs.  Default:
@@ -661,6 +667,9 @@ def simulate(params: Parameters | None = None, model: str = "macro", t_end: floa
     build0 = plant.build_seconds
     P = plant.param_vector(params)
     xs0, mode0 = plant.initial(params)
+    if held:
+        from .model.rest import held_state
+        initial = dict(held_state(params, names), **(initial or {}))
     for name, value in (initial or {}).items():
         if name not in plant.state_names:
             raise SimulationError(f"initial state {name!r} is not a state of this plant: "

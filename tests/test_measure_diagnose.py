@@ -17,7 +17,7 @@ from kilnctl import Parameters
 from kilnctl.errors import ModelError, NotFittedError
 from kilnctl.measure.cautions import drift_texts, effect_cautions, setup_cautions
 from kilnctl.measure.diagnose import Diagnosis
-from kilnctl.measure.evidence import variance_inflation
+from kilnctl.measure.stats import variance_inflation
 from kilnctl.measure.synthetic import DEFAULT_GAINS, make_record
 
 SETUP = Parameters(DEFAULT_GAINS)
@@ -781,7 +781,7 @@ def test_a_current_offset_at_standstill_is_reported_and_a_clean_record_says_noth
     once with +25 A added to every current sample (a sensor offset) and once without."""
     import numpy as np
 
-    from kilnctl.measure.signature import standstill_offsets
+    from kilnctl.measure.standstill import standstill_offsets
     from kilnctl.measure.io import Measurement
 
     m, _ = make_record((), seed=1, t_end=12.0)
@@ -810,7 +810,7 @@ def test_coloured_noise_at_standstill_is_not_an_offset_once_the_residual_shows_i
     import numpy as np
 
     from kilnctl.measure.io import Measurement
-    from kilnctl.measure.signature import standstill_offsets, window_mean_spread
+    from kilnctl.measure.standstill import standstill_offsets, window_mean_spread
 
     m, _ = make_record((), seed=1, t_end=40.0)
     dt, tau = 0.02, 0.4

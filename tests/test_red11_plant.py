@@ -16,7 +16,8 @@ import pytest
 from benchmarks.red11_plant import Sim, noise, table1
 from kilnctl import Parameters
 from kilnctl.measure import Measurement, compare
-from kilnctl.measure.signature import residual_signature, standstill_offsets
+from kilnctl.measure.signature import residual_signature
+from kilnctl.measure.standstill import standstill_offsets
 
 SETUP = Parameters(gains="given", k_p=2.0, k_I=5.0, k_D=0.01)
 

@@ -88,7 +88,7 @@ def test_a_kiln_turning_before_the_start_up_is_named():
     of 376 N m had made up for it unnamed; the record at rest says nothing of it."""
     from kilnctl import Parameters
     from kilnctl.measure import Measurement
-    from kilnctl.measure.signature import standstill_offsets
+    from kilnctl.measure.standstill import standstill_offsets
     from kilnctl.measure.synthetic import DEFAULT_GAINS, make_record
 
     setup = Parameters(DEFAULT_GAINS)

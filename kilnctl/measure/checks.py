@@ -19,7 +19,8 @@ from . import report as _report
 from .effects import CATALOGUE
 from .evidence import close_rival
 from .outside import CurrentPulse
-from .signature import rest_level
+from ..model.rest import holding_current
+from .standstill import rest_level
 
 __all__ = ["SelectionChecks", "FORM_BOUND", "REST_EVIDENCE", "PULSE_END_MARGIN_S"]
 
@@ -445,7 +446,7 @@ class SelectionChecks:
         record in motion exactly as an offset of the current sensor does; only the samples at rest before the
         start tell them apart, which the fits leave out (the model starts there).  The offset reads the same at
         rest, the friction reads zero.  With the current's level at rest
-        (:func:`~kilnctl.measure.signature.rest_level`, its standard error at least the spread of the final
+        (:func:`~kilnctl.measure.standstill.rest_level`, its standard error at least the spread of the final
         residual's means over as many samples) the two explanations, of equal size and of the same number of
         parameters, are weighed by their likelihood ratio; the offset is the better when that ratio exceeds e
         (2 ln LR > :data:`REST_EVIDENCE`, "positive" evidence on Kass and Raftery's scale) and the level lies
@@ -461,15 +462,28 @@ class SelectionChecks:
         if level is None or not level["se"] > 0:
             return None
         c = float(eff.offset_in_motion(final.values_, final.params_))
-        x, se = level["mean"], level["se"]
+        own = self._holding_current(final, exp)
+        x, se = level["mean"] - own, level["se"]
         lr2 = (x ** 2 - (x - c) ** 2) / se ** 2
         if not (lr2 > REST_EVIDENCE and abs(x) > 2.0 * se):
             return None
-        return (f"it adds {c:+.2f} A to the current once the motor turns, and the current reads {x:+.2f} A "
+        reads = (f"reads {x:+.2f} A" if not own else
+                 f"reads {x:+.2f} A beyond the {own:+.2f} A with which the model holds the kiln")
+        return (f"it adds {c:+.2f} A to the current once the motor turns, and the current {reads} "
                 f"(standard error {se:.2f} A, {level['n_samples']} samples) at standstill before the start, where "
-                f"the model has zero: nearer {c:+.2f} A than zero (2 ln LR {lr2:.1f}), so a current-sensor offset, "
+                f"the model has {'zero' if not own else 'no more'}: nearer {c:+.2f} A than zero (2 ln LR {lr2:.1f}), "
+                "so a current-sensor offset, "
                 f"which reads the same at rest and in motion, explains the record better than {e}, which needs the "
                 f"motor to turn")
+
+    @staticmethod
+    def _holding_current(cal, exp) -> float:
+        """The current with which ``cal``'s model holds the kiln at rest [A]: zero unless the record shows the
+        drive holding it (``exp``'s :attr:`~kilnctl.measure.io.Experiment.held`) and the model has a load at rest
+        (an unbalance, :func:`kilnctl.model.rest.holding_current`)."""
+        if not getattr(exp, "held", False):
+            return 0.0
+        return holding_current(cal.run_.response.params, cal.run_.response.components)
 
     def _rest_forms(self, rest):
         """The forms to refit ``rest`` (selected effects without the one checked) in: the diagnosis' own

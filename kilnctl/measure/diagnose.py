@@ -66,7 +66,8 @@ from .oscillation import dominant_oscillation
 from .outside import CurrentDrift, CurrentStep
 from .refit import PAIRED, CandidateRefits, _falls, _far, _torque_law_starts
 from .runner import CHANNELS
-from .signature import residual_signature, standstill_offsets
+from .signature import residual_signature
+from .standstill import standstill_offsets
 from .stats import failing_intervals
 from . import report as _report
 from .report import format_fit as _fmt_fit
@@ -642,7 +643,8 @@ class Diagnosis(CandidateRefits, SelectionChecks):
         self.caveats_ = list(self.setup_cautions_) + effect_cautions(self, m, exp, params) + form_notes \
             + skew_texts(self.comparison_final_, selected)
         self.standstill_ = standstill_offsets(m, exp, residuals={k: ch.residual for k, ch in
-                                                                 self.comparison_final_.channels.items()})
+                                                                 self.comparison_final_.channels.items()},
+                                              held={"current_A": self._holding_current(final, exp)})
         if self.standstill_:
             text = "; ".join(o["text"] for o in self.standstill_)
             self.caveats_.append(text + (f": {', '.join(selected)} may stand in for it" if selected else ""))

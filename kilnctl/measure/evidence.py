@@ -21,7 +21,7 @@ import numpy as np
 from .effects import CATALOGUE
 from .report import json_number as _num, unit_of as _unit
 from .runner import CHANNELS
-from .stats import fit_percent, noise_excess
+from .stats import _initial_positive, fit_percent, noise_excess, variance_inflation
 
 if TYPE_CHECKING:
     from .calibrate import Calibration
@@ -29,40 +29,6 @@ if TYPE_CHECKING:
 __all__ = ["variance_inflation", "correlation_length", "score_covariance", "noise_filter", "whiten", "holdout_z",
            "whitened_delta_bic", "CandidateResult", "close_rival", "within_noise", "speed_follows_otherwise",
            "SPEED_EXCESS", "SPEED_FIT_STRUCTURE", "judge"]
-
-
-def variance_inflation(e, max_lag: int | None = None) -> float:
-    """Variance inflation of a sum of autocorrelated residuals: 1 + 2 sum_k rho_k.
-
-    The sum runs over the initial positive run of the autocorrelation (Geyer's
-    initial positive sequence); 1 for white noise, (1 + phi)/(1 - phi) for
-    first-order autoregressive noise.
-
-    Parameters
-    ----------
-    e : array_like
-        Residual, evenly sampled.
-    max_lag : int, optional
-        Largest lag [samples] (default N/4).
-
-    Returns
-    -------
-    float
-        >= 1.
-    """
-    return float(max(1.0, 1.0 + 2.0 * _initial_positive(e, max_lag).sum()))
-
-
-def _initial_positive(e, max_lag: int | None = None) -> np.ndarray:
-    """Autocorrelation of ``e`` at lags 1, 2, ... up to the first that is no longer positive (excluded), at most
-    ``max_lag`` (default N/4) lags: Geyer's initial positive sequence."""
-    from .stats import autocorr
-
-    e = np.asarray(e, float)
-    L = max(1, min(e.size // 4, max_lag or e.size // 4))
-    r = autocorr(e - e.mean(), L)["r"][1:]
-    neg = np.nonzero(r <= 0)[0]
-    return r[: neg[0]] if neg.size else r
 
 
 def correlation_length(e, max_lag: int | None = None) -> int:

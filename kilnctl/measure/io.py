@@ -24,7 +24,7 @@ from __future__ import annotations
 import math
 import os
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Mapping
 
@@ -88,6 +88,12 @@ class Experiment:
         (component ``ramp_knots<K>``, :func:`~kilnctl.measure.reference.fit_knots`);
         ``ramp_rate`` is then the first segment's rate and ``omega_ref`` the
         highest knot.  None otherwise.
+    held : bool
+        The drive holds the kiln at rest before the start: the record's current at standstill lies away from
+        zero (:func:`~kilnctl.measure.standstill.standstill_offsets`), so the model starts held by its speed loop
+        (:func:`kilnctl.model.rest.held_state`: an unbalance's holding current) rather than from zero current.
+        A drive switched on before the ramp shows it; so does a current sensor's offset, for which it changes
+        nothing (a model without a load at rest holds it with zero current).
     """
 
     t0: float
@@ -97,6 +103,7 @@ class Experiment:
     notes: tuple = ()
     jerk: float | None = None
     knots: tuple | None = None
+    held: bool = False
 
     @property
     def ramp_end(self) -> float:
@@ -123,7 +130,7 @@ class Experiment:
         return {"t0_s": self.t0, "ramp_rate_rpm_per_s": self.ramp_rate, "omega_ref_rpm": self.omega_ref,
                 "jerk_rpm_per_s2": self.jerk,
                 "knots": None if self.knots is None else [{"t_s": t, "rpm": w} for t, w in self.knots],
-                "source": self.source, "notes": list(self.notes)}
+                "source": self.source, "notes": list(self.notes), "held": self.held}
 
 
 @dataclass(frozen=True, eq=False)
@@ -296,6 +303,14 @@ class Measurement:
             ``t0`` is not a finite number, or leaves less than a record (:data:`MIN_SAMPLES` samples over
             :data:`MIN_DURATION_S`) after it.
         """
+        exp = self._start_up(params, t0)
+        from .standstill import standstill_offsets  # (it reads a Measurement: imported here)
+        # the current at standstill away from zero: the drive holds the kiln at rest (Experiment.held)
+        held = any(o["channel"] == "current_A" for o in standstill_offsets(self, exp))
+        return replace(exp, held=True) if held else exp
+
+    def _start_up(self, params: Parameters, t0: float | None) -> Experiment:
+        """The start time and speed reference of :meth:`experiment`, without ``held``."""
         if t0 is not None:
             t0 = self._checked_t0(t0)
         ref = self.speed_ref

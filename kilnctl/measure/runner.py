@@ -104,7 +104,7 @@ def run_model(params: Parameters, measurement: Measurement, experiment: Experime
     experiment : Experiment
         Start time [s], ramp rate [rpm/s] and final reference [rpm] (and the
         jerk limit of an S-curve reference [rpm/s^2], or the knots of a reference that is not one ramp and
-        hold, see :class:`Experiment`).
+        hold, and whether the drive holds the kiln at rest before it, see :class:`Experiment`).
     model : {'macro', 'micro'}, default 'macro'
         Base model.
     effects : sequence of str
@@ -149,7 +149,7 @@ def run_model(params: Parameters, measurement: Measurement, experiment: Experime
         effects = ("ramp_scurve",) + tuple(effects)
         initial = {"ramp_a": experiment.ramp_rate, "ramp_j": jerk}
     resp = simulate(p, model, t_end=t_end, effects=tuple(effects), remove=tuple(remove), dt=min(dt, t_end / 4),
-                    max_events=max_events, initial=initial)
+                    max_events=max_events, initial=initial, held=bool(getattr(experiment, "held", False)))
     ts = np.asarray(resp.t, dtype=float)
     rel = t - experiment.t0
     keep = _last_of_each_time(ts)  # one index for every signal of the run

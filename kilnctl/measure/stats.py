@@ -19,7 +19,7 @@ import numpy as np
 
 from ..errors import ParameterError
 
-__all__ = ["fit_percent", "noise_excess", "autocorr", "crosscorr", "residual_spectrum", "failing_intervals", "best_step",
+__all__ = ["fit_percent", "noise_excess", "variance_inflation", "autocorr", "crosscorr", "residual_spectrum", "failing_intervals", "best_step",
            "robust_sigma", "median_step", "Z99"]
 
 #: two-sided 99 % quantile of the standard normal distribution
@@ -281,6 +281,38 @@ def residual_spectrum(e, fs: float | None = None, seconds: float = 10.0, *, t=No
     return {"f": f, "psd": psd, "dominant_hz": float(f[k]),
             "peak_ratio": float(psd[k] / med) if med > 0 else math.inf,
             "narrowband_hz": float(f[kb]), "narrowband_ratio": float(best)}
+
+
+def variance_inflation(e, max_lag: int | None = None) -> float:
+    """Variance inflation of a sum of autocorrelated residuals: 1 + 2 sum_k rho_k.
+
+    The sum runs over the initial positive run of the autocorrelation (Geyer's
+    initial positive sequence); 1 for white noise, (1 + phi)/(1 - phi) for
+    first-order autoregressive noise.
+
+    Parameters
+    ----------
+    e : array_like
+        Residual, evenly sampled.
+    max_lag : int, optional
+        Largest lag [samples] (default N/4).
+
+    Returns
+    -------
+    float
+        >= 1.
+    """
+    return float(max(1.0, 1.0 + 2.0 * _initial_positive(e, max_lag).sum()))
+
+
+def _initial_positive(e, max_lag: int | None = None) -> np.ndarray:
+    """Autocorrelation of ``e`` at lags 1, 2, ... up to the first that is no longer positive (excluded), at most
+    ``max_lag`` (default N/4) lags: Geyer's initial positive sequence."""
+    e = np.asarray(e, float)
+    L = max(1, min(e.size // 4, max_lag or e.size // 4))
+    r = autocorr(e - e.mean(), L)["r"][1:]
+    neg = np.nonzero(r <= 0)[0]
+    return r[: neg[0]] if neg.size else r
 
 
 def noise_excess(e) -> float:

@@ -213,6 +213,16 @@ class Component:
         """Return initial values of this component's states (default zero)."""
         return {}
 
+    def rest_kiln_torque(self, params: Parameters) -> float:
+        """Return the torque this component puts on the kiln at rest at t = 0 [N*m] (default zero): what a drive
+        that is on before the start-up holds (:mod:`kilnctl.model.rest`)."""
+        return 0.0
+
+    def held_state(self, params: Parameters, torque: float) -> dict[str, float]:
+        """Return this component's states while the drive train carries ``torque`` to the kiln at rest [N*m]
+        (default none: a rigid link; :mod:`kilnctl.model.rest`)."""
+        return {}
+
     def signals(self, e, mode: str | None) -> None:
         """Phase 1: define signals (references, controller outputs, currents)."""
 

@@ -189,6 +189,9 @@ class DrivetrainCompliance(Component):
     def finish(self, e, mode):
         e.set_rate("phi_po", e.sig["phi_po_rate"])
 
+    def held_state(self, params, torque):
+        return {"phi_po": torque / params.k_po}
+
 
 @register
 class Pinion(Component):

@@ -227,6 +227,9 @@ class KilnUnbalance(Component):
     def loads(self, e, mode):
         e.add_torque("kiln", -e.p.T_unb * ca.sin(e.x["theta_o"] + e.p.phi_unb))
 
+    def rest_kiln_torque(self, params):
+        return -params.T_unb * math.sin(params.phi_unb)
+
     def finish(self, e, mode):
         e.set_rate("theta_o", e.x["omega_kiln"])
 
@@ -256,6 +259,9 @@ class KilnSecondHarmonic(Component):
 
     def loads(self, e, mode):
         e.add_torque("kiln", -e.p.T_unb2 * ca.sin(2.0 * e.x["theta_o"] + e.p.phi_unb2))
+
+    def rest_kiln_torque(self, params):
+        return -params.T_unb2 * math.sin(params.phi_unb2)
 
 
 @register
