@@ -405,6 +405,67 @@ def test_the_final_check_replaces_a_kiln_unbalance_by_the_change_it_imitates():
         assert refit.values_[k] == pytest.approx(truth["plant"][k], rel=0.02)
 
 
+def _line_record(hz):
+    """Nothing of the catalogue hidden; the measured current carries a sinusoid of 20 A at ``hz`` from the set
+    speed's start on (red team 20's X1: an eccentric pinion's 8e4 N m at 0.105 Hz, 19.5 A)."""
+    from kilnctl.measure import Measurement
+
+    m0, truth = make_record((), seed=22, mismatch=("mu_c", "m_v"), t_end=45.0)
+    swing = 20.0 * np.sin(2 * np.pi * hz * m0.t + 0.3) * (m0.t >= 10.0)
+    return (Measurement.from_arrays(m0.t, m0.current + swing, m0.speed, m0.speed_ref, source=f"line {hz:g} Hz",
+                                    params=SETUP), truth)
+
+
+@pytest.mark.parametrize("kiln_turns", [False, True])
+def test_the_final_check_replaces_a_drag_by_the_periodic_change_it_imitates(kiln_turns):
+    # truth: the sinusoid the record was built with (_line_record: 20 A at 0.105 Hz, a period of 9.5 s, from
+    # 10 s on) and the plant's base values.  A drag fitted on the whole record (B_o from ten times the usual,
+    # as red team 20's X1 ended) stands in the final model; refitted without it, with a sinusoid at the
+    # residual's line beside the base, both BICs fall: the drag is removed, the line named at the frequency and
+    # size it was built with.  At the kiln's own turn frequency (a kiln unbalance's) nothing is tried
+    from kilnctl.measure import holdout_masks
+
+    d = Diagnosis(SETUP, candidates=["viscous_drag"])
+    turn = SETUP.omega_ref / (60.0 * SETUP.n)
+    m, truth = _line_record(turn if kiln_turns else 0.105)
+    exp = m.experiment(SETUP, t0=d.t0)
+    init = {k: float(SETUP[k]) for k in d.calibrate}
+    final = d._calibrate(m, SETUP, ("viscous_drag",), "std", None, dict(init, B_o=3e6), (), exp, None, None, 1,
+                         True)
+    train, test = holdout_masks(m, d.holdout, d.holdout_fraction, t0=exp.t0)
+    scales = {"current_A": 8.0, "speed_rpm": 1.0}
+    kept, refit, gone, change = d._final_line(m, SETUP, ["viscous_drag"], final, scales, train, test, exp,
+                                              lambda s: None)
+    if kiln_turns:
+        assert kept == ["viscous_drag"] and change is None and refit is final
+        return
+    assert kept == [] and "B_o" not in refit.values_
+    assert change["kind"] == "line" and change["hz"] == pytest.approx(0.105, rel=0.03)
+    assert change["amplitude_A"] == pytest.approx(20.0, rel=0.1) and change["delta_bic"] < -d.min_delta_bic
+    (r,) = gone
+    assert r.effect == "viscous_drag" and not r.supported
+    assert r.reason.startswith("removed in the final check: a periodic change at 0.10")
+    for k in ("mu_c", "m_v"):
+        assert refit.values_[k] == pytest.approx(truth["plant"][k], rel=0.02)
+
+
+def test_a_line_term_recovers_the_sinusoid_it_is_fitted_to():
+    # truth by construction: 12 sin(w t) - 5 cos(w t) from 3 s on, plus white noise of 1 A
+    from kilnctl.measure.outside import CurrentLine
+
+    rng = np.random.default_rng(4)
+    t = np.arange(0.0, 30.0, 0.02)
+    w = 2 * np.pi * 0.2
+    e = (12.0 * np.sin(w * t) - 5.0 * np.cos(w * t)) * (t >= 3.0) + rng.normal(0.0, 1.0, t.size)
+    term = CurrentLine(0.2, 3.0)
+    f = term.fit(t, e)
+    assert f["sin"] == pytest.approx(12.0, abs=0.1) and f["cos"] == pytest.approx(-5.0, abs=0.1)
+    assert f["amplitude"] == pytest.approx(13.0, abs=0.1) and f["rss"] == pytest.approx(t.size, rel=0.1)
+    assert np.all(term.shape(t[t < 3.0], f) == 0.0)
+    assert term.text(f).startswith("a periodic change at 0.2 Hz (a period of 5 s) from t = 3.0 s: the current "
+                                   "swings by +-13 A")
+
+
 def test_a_drifting_current_offset_is_not_taken_for_a_kiln_unbalance():
     # truth: nothing of the catalogue is hidden; the logged current carries an offset drifting 0.25 A/s from the
     # record's start (a current-sensor offset warming up: 35 A over 140 s, no torque).  A kiln unbalance (one

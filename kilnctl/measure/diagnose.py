@@ -226,7 +226,9 @@ class Diagnosis(CandidateRefits, SelectionChecks):
         A change outside the catalogue (an abrupt step or a slow drift of
         the current) that explained the record better than every supported
         candidate (``kind``, its values, ``delta_bic``, ``text``; see
-        :meth:`_outside`), or None.
+        :meth:`_outside`), or one that a selected effect only imitated, found
+        in the final check (``kind`` "pulse" or "line": :meth:`_final_pulse`,
+        :meth:`_final_line`), or None.
     unexplained_ : dict or None
         What the record shows that the final model does not explain, or None: the final residual's signature
         (:func:`~kilnctl.measure.signature.residual_signature`: ``text``, ``hint``, ``structured`` ...), its
@@ -609,10 +611,11 @@ class Diagnosis(CandidateRefits, SelectionChecks):
         final, form_notes = self._final_forms(m, params, tuple(selected), final, exp, say)
         selected, final, dropped = self._final_check(m, params, selected, final, scales, train, test, exp, say,
                                                      pool)
-        if self.outside_change_ is None:
-            selected, final, pulsed, self.outside_change_ = self._final_pulse(m, params, selected, final, scales,
-                                                                              train, test, exp, say)
-            dropped = dropped + pulsed
+        for check in (self._final_pulse, self._final_line):  # a change outside the catalogue that an effect imitated
+            if self.outside_change_ is None:
+                selected, final, gave_way, self.outside_change_ = check(m, params, selected, final, scales, train,
+                                                                        test, exp, say)
+                dropped = dropped + gave_way
         self.swaps_ = {k: v for k, v in self.swaps_.items() if k in selected}
         self.forms_ = {e: f for e, f in self._forms.items() if e in selected}
         self.stick_slip_ = self._rugged(tuple(selected))

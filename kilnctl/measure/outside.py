@@ -9,7 +9,9 @@ it adds no parameter to the search, and counts as :attr:`n_params` parameters in
 - :class:`CurrentPulse`: b (H(t - t_on) - H(t - t_off)), a change that comes and goes (a load that builds up
   and slumps, a process upset that passes);
 - :class:`CurrentDrift`: a + b (t - t_start), a straight-line drift of the logged current over the whole
-  record (a current-sensor offset or gain drifting as the electronics warm up).
+  record (a current-sensor offset or gain drifting as the electronics warm up);
+- :class:`CurrentLine`: a sin(2 pi f t) + b cos(2 pi f t) at the set speed, a periodic load or oscillation at
+  a frequency no catalogued effect has (an eccentric pinion, a gear's run-out, a process cycle).
 
 Each ``fit`` returns a dict with ``kind``, ``rss`` [A^2] and the term's values, or None; ``shape`` gives the
 term at given times; ``text`` says it for a report.
@@ -184,3 +186,59 @@ class CurrentDrift:
         return (f"a slow drift of the current: {fitted['rate'] * span:+.0f} A over the record's {span:.0f} s "
                 f"({fitted['rate']:+.2f} A/s), along a straight line, which no catalogued effect makes (a "
                 "current-sensor offset or gain drifting as the electronics warm up, a slowly changing load)")
+
+
+@dataclass(frozen=True)
+class CurrentLine:
+    """A sinusoid a sin(2 pi f t) + b cos(2 pi f t) of the current at ``hz``, from ``t_from`` on (zero before).
+
+    At the set speed a load that repeats with a shaft's rotation (an eccentric pinion, a bent gearbox shaft, a
+    girth gear's run-out) or a process cycle is a line in the current's spectrum; none of the catalogue's
+    effects makes one away from the kiln's own turn and the burden's oscillation.  The frequency comes from the
+    residual's spectrum (:func:`~kilnctl.measure.signature.spectral_line`), so it counts as a parameter.
+
+    Parameters
+    ----------
+    hz : float
+        Frequency [Hz].
+    t_from : float
+        Record time from which the line is fitted [s] (the set speed's start: during the ramp a frequency locked
+        to a shaft sweeps).
+    """
+
+    hz: float
+    t_from: float
+
+    kind = "line"
+    n_params = 3  # a, b and the frequency read from the spectrum
+
+    def _columns(self, t) -> np.ndarray:
+        t = np.asarray(t, float)
+        w = 2.0 * np.pi * self.hz * t
+        on = (t >= self.t_from).astype(float)
+        return np.column_stack([np.sin(w) * on, np.cos(w) * on])
+
+    def fit(self, t, e) -> dict | None:
+        """The least-squares sinusoid at ``hz`` through the residual ``e`` [A] at times ``t`` [s] from ``t_from``
+        on, or None with fewer than ten samples there."""
+        e = np.asarray(e, float)
+        design = self._columns(t)
+        if int(np.count_nonzero(design[:, 1] != 0.0)) < 10:
+            return None
+        (a, b), *_ = np.linalg.lstsq(design, e, rcond=None)
+        res = e - design @ np.array([a, b])
+        return {"kind": self.kind, "hz": float(self.hz), "t": float(self.t_from), "sin": float(a), "cos": float(b),
+                "amplitude": float(np.hypot(a, b)), "rss": float(res @ res)}
+
+    def shape(self, t, fitted) -> np.ndarray:
+        """The sinusoid, in A, at times ``t`` [s]."""
+        return self._columns(t) @ np.array([fitted["sin"], fitted["cos"]])
+
+    @staticmethod
+    def text(fitted) -> str:
+        """The line for a report."""
+        return (f"a periodic change at {fitted['hz']:.3g} Hz (a period of {1.0 / fitted['hz']:.3g} s) from t = "
+                f"{fitted['t']:.1f} s: the current swings by +-{fitted['amplitude']:.0f} A, which no catalogued "
+                "effect makes at that frequency (a load that repeats with a shaft's rotation: an eccentric pinion, "
+                "a bent gearbox shaft, a girth gear's run-out; or a process cycle)")
+

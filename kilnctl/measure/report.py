@@ -690,7 +690,7 @@ def diagnosis_headline(d) -> str:
         case = _final_against_first(d)
         if case == "better":
             s += f" (its first calibration stopped at {c0:.1f} %)"
-        elif case == "beside_pulse":
+        elif case == "beside_change":
             s += f" at the values fitted beside the change outside the catalogue ({c0:.1f} % calibrated through it)"
         elif case == "lower":
             s += f" (the base as first calibrated: {c0:.1f} %)"
@@ -892,14 +892,15 @@ def _effect_words(name: str) -> str:
 
 def _final_against_first(d) -> str | None:
     """How a diagnosis' final current fit stands against the base's first calibration, for the headlines:
-    "better" (0.05 point or more above it: the search found the base a better optimum), "beside_pulse" (as much
-    below, the base evaluated at the values fitted beside a change that comes and goes, see
-    :meth:`~kilnctl.measure.checks.SelectionChecks._final_pulse`), "lower" (below for another reason), or None."""
+    "better" (0.05 point or more above it: the search found the base a better optimum), "beside_change" (as
+    much below, the base evaluated at the values fitted beside a change that comes and goes or a periodic one,
+    see :meth:`~kilnctl.measure.checks.SelectionChecks._final_pulse`), "lower" (below for another reason), or None."""
     c0, c1 = d.baseline_["current_A"], d.final_["current_A"]
     if c1 >= c0 + 0.05:
         return "better"
     if c1 <= c0 - 0.05:
-        return "beside_pulse" if (getattr(d, "outside_change_", None) or {}).get("kind") == "pulse" else "lower"
+        beside = (getattr(d, "outside_change_", None) or {}).get("kind") in ("pulse", "line")
+        return "beside_change" if beside else "lower"
     return None
 
 
@@ -922,7 +923,7 @@ def diagnosis_plain_headline(d) -> str:
         # through the change: red team 18's X1, 87.4 % against 89.2 %)
         again = {"better": f" (its first calibration stopped at {c0:.1f} %; the search found the same model a "
                            "better optimum)",
-                 "beside_pulse": f" at the values fitted beside the change named next ({c0:.1f} % calibrated "
+                 "beside_change": f" at the values fitted beside the change named next ({c0:.1f} % calibrated "
                                  "through it, which the change pulls off the plant's values)",
                  "lower": f" (the base as first calibrated: {c0:.1f} %)"}.get(_final_against_first(d), "")
         removed = [_effect_words(r.effect) for r in getattr(d, "removed_", None) or []]
