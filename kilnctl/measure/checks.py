@@ -15,11 +15,11 @@ import math
 import time
 
 from ..errors import KilnctlError
+from ..model.rest import holding_current
 from . import report as _report
 from .effects import CATALOGUE
 from .evidence import close_rival
 from .outside import CurrentLine, CurrentPulse
-from ..model.rest import holding_current
 from .standstill import rest_level
 
 __all__ = ["SelectionChecks", "FORM_BOUND", "REST_EVIDENCE", "PULSE_END_MARGIN_S", "LINE_KILN_MARGIN"]
@@ -413,16 +413,15 @@ class SelectionChecks:
         catalogued effect makes; over a record of a few of its periods a drag or a friction can follow part of
         it (red team 20's X1: a pinion's 8e4 N m at 0.105 Hz, 19.5 A, four periods, selected as a viscous drag
         of twice the usual size, cautioned, the line named unexplained beside it).  When the final model's
-        residual at the set speed has a line (:func:`~kilnctl.measure.signature.spectral_line`) away from the
+        residual has a line (:func:`~kilnctl.measure.signature.spectral_line`, over the whole record) away from the
         kiln's turn and its second harmonic (a kiln unbalance's own, within :data:`LINE_KILN_MARGIN`), each
         selected effect is tried against a sinusoid at that frequency
         (:class:`~kilnctl.measure.outside.CurrentLine`), as :meth:`_final_pulse` tries a pulse: it wins when it
         lowers the BIC by more than ``min_delta_bic`` against the final model.  The BIC with the coloured noise
         modelled is no test here: its noise filter, fitted to the final model's residual, takes the line for
         coloured noise (X1: -1324 plain, +7.4 whitened), where a line that stands LINE_RATIO times above the
-        spectrum around it (:func:`~kilnctl.measure.signature.spectral_line`) is what coloured noise does not
-        make.  Not where the final model has stick-slip cycles: their phase, a little off,
-        puts lines of its own in the residual.
+        spectrum around it is what coloured noise does not make.  Not where the final model has stick-slip
+        cycles: their phase, a little off, puts lines of its own in the residual.
 
         Returns
         -------
@@ -458,10 +457,9 @@ class SelectionChecks:
         The final structure without the effect is refitted on the whole record from the final values with the
         term added; the term wins when ``accept(cal)`` (a (bool, note) pair) holds and it lowers the BIC and
         (with ``whitened``) the BIC with the coloured noise modelled, each by more than ``min_delta_bic``,
-        against the final model.
-        The best winner's effect is removed, the rest evaluated at the values fitted beside the term (the final
-        model is the catalogue's), and the change returned with ``kind``, ``delta_bic``, ``text`` and
-        ``values(fitted)``.
+        against the final model.  The best winner's effect is removed, the rest evaluated at the values fitted
+        beside the term (the final model is the catalogue's), and the change returned with ``kind``,
+        ``delta_bic``, ``text`` and ``values(fitted)``.
         """
         won = None
         for e in effects:

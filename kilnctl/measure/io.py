@@ -38,6 +38,7 @@ from .clipping import clipped_levels, clipped_notes, unclipped
 from .glitches import glitch_mask, glitch_notes, glitches
 from .logger import frozen_notes, resampled_every, resampled_notes, sampling_notes, speed_step, speed_step_notes
 from .reference import fit_knots, fit_scurve, scurve_values
+from .standstill import standstill_offsets
 
 __all__ = ["Measurement", "Setup", "Experiment", "read_csv", "read_record", "load_setup", "REQUIRED", "OPTIONAL",
            "MIN_DURATION_S", "MIN_SAMPLES", "GAP_FACTOR", "MAX_RECORD_S", "record_columns"]
@@ -304,7 +305,6 @@ class Measurement:
             :data:`MIN_DURATION_S`) after it.
         """
         exp = self._start_up(params, t0)
-        from .standstill import standstill_offsets  # (it reads a Measurement: imported here)
         # the current at standstill away from zero: the drive holds the kiln at rest (Experiment.held)
         held = any(o["channel"] == "current_A" for o in standstill_offsets(self, exp))
         return replace(exp, held=True) if held else exp
