@@ -97,7 +97,7 @@ def test_the_forms_starts_span_real_limiter_loops():
 
 
 @pytest.mark.parametrize("clamp_dbic, lag_dbic, tried", [
-    (-440.0, -50.0, ["pi"]),   # f10: the clamp lowered BIC unsupported: its pi form is tried; the lag's forms are not
+    (-440.0, -50.0, ["pi", "falling"]),  # f10: the clamp lowered BIC unsupported: its forms are tried, the lag's not
     (7.9, -50.0, []),          # a clamp that did not lower BIC: nothing tried
 ])
 def test_the_pi_form_is_tried_where_the_clamp_lowered_bic_unsupported(clamp_dbic, lag_dbic, tried):
@@ -124,3 +124,25 @@ def test_the_pi_form_is_tried_where_the_clamp_lowered_bic_unsupported(clamp_dbic
     lag = CandidateResult("speed_sensor_lag", lag_dbic, -1.0, {}, {}, {}, [], [], False, "", 1.0, calibration=own)
     d._in_best_form(None, None, [], [clamp, lag], own, None, None, None, None, None, lambda s: None)
     assert seen == tried
+
+
+def test_a_limit_falling_with_speed_holds_the_kiln_where_it_meets_the_load():
+    """Truth by hand: the falling limit's own law, I = I_max (1 - s_lim w / w_ref), holds at the point where the
+    drive settles (the PI limiter leaves no steady error), and that point lies below the set speed when the limit
+    there is under the kiln's running current (red teams 16 and 20: the kiln 20 rpm low for 30 s)."""
+    from kilnctl.measure.synthetic import DEFAULT_GAINS
+    from kilnctl.simulate import simulate
+
+    p = Parameters(DEFAULT_GAINS)
+    free = simulate(p, "macro", t_end=40.0)
+    i_run = float(free.outputs["i_a"][-1])
+    s_lim = 0.5
+    q = p.replace(I_max=0.97 * i_run / (1.0 - s_lim), s_lim=s_lim, k_pl=1.0, k_il=50.0)
+    r = simulate(q, "macro", t_end=40.0, effects=("current_limit_falling",))
+    w_end, i_end = float(r.outputs["speed_rpm"][-1]), float(r.outputs["i_a"][-1])
+    assert w_end < p.omega_ref - 5.0
+    assert i_end == pytest.approx(q.I_max * (1.0 - s_lim * w_end / p.omega_ref), abs=0.5)
+    # at s_lim = 0 it is the PI limiter of the 'pi' form
+    same = simulate(q.replace(s_lim=0.0), "macro", t_end=10.0, effects=("current_limit_falling",))
+    pi = simulate(q.replace(s_lim=0.0), "macro", t_end=10.0, effects=("current_limit_pi",))
+    assert np.max(np.abs(same.outputs["i_a"] - pi.outputs["i_a"])) < 1e-9
