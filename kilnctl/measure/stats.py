@@ -19,7 +19,8 @@ import numpy as np
 
 from ..errors import ParameterError
 
-__all__ = ["fit_percent", "noise_excess", "variance_inflation", "autocorr", "crosscorr", "residual_spectrum", "failing_intervals", "best_step",
+__all__ = ["fit_percent", "noise_excess", "variance_inflation", "autocorr", "crosscorr", "residual_spectrum",
+           "failing_intervals", "best_step",
            "robust_sigma", "median_step", "Z99"]
 
 #: two-sided 99 % quantile of the standard normal distribution
