@@ -288,8 +288,8 @@ class CandidateResult:
 #: fit [%] of each channel from which the current model's residual is taken to be mostly noise (see
 #: :func:`within_noise`)
 NOISE_FIT = 90.0
-#: a speed residual whose RMS is this many times its sample-to-sample noise (:func:`~kilnctl.measure.stats.noise_excess`)
-#: is a following error the model lacks, not the logger's noise (AR(1) noise reaches it at phi = 0.99) [-] ...
+#: a speed residual whose RMS is this many times its sample-to-sample noise
+#: (:func:`~kilnctl.measure.stats.noise_excess`) is a following error the model lacks, not the logger's noise (AR(1) noise reaches it at phi = 0.99) [-] ...
 SPEED_EXCESS = 10.0
 #: ... when the speed fit is also below this [%] (the 79 benchmark records' final models fit the speed to 99.57 %
 #: or more; red team 11's cascade drive, 97.4 % with a residual of +-6 rpm, 20 times the speed's noise, had

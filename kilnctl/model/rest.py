@@ -71,7 +71,8 @@ def held_state(params: Parameters, names) -> dict[str, float]:
     -------
     dict of str to float
         ``x_a`` [A] (the current, the speed error being zero), with an integrating speed controller its
-        integrator ``z`` [rpm*s], and the drive train's twist where it has one; empty when nothing needs holding or the plant has no speed controller.
+        integrator ``z`` [rpm*s], and the drive train's twist where it has one; empty when nothing needs holding
+        or the plant has no speed controller.
     """
     if "pid" not in names or "dc_motor" not in names:
         return {}
