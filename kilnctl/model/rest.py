@@ -76,13 +76,13 @@ def held_state(params: Parameters, names) -> dict[str, float]:
     """
     if "pid" not in names or "dc_motor" not in names:
         return {}
-    i = holding_current(params, names)
-    if i == 0.0:
+    carried = -rest_kiln_torque(params, names)  # what the drive train passes to the kiln
+    if carried == 0.0:
         return {}
+    i = carried / (params.n * params.k_i)  # (holding_current)
     out = {"x_a": i}
     if params.k_I > 0:
         out["z"] = params.R_a * i / params.k_I
-    carried = -rest_kiln_torque(params, names)  # what the drive train passes to the kiln
     for n in names:
         if n in REGISTRY:
             out.update(REGISTRY[n]().held_state(params, carried))
