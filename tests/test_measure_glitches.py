@@ -73,6 +73,28 @@ def test_a_kick_the_speed_answers_is_no_glitch(record):
     assert [g.at for g in m2.glitches] == [(500, 501)]
 
 
+def test_a_kick_with_the_speed_jolted_in_its_own_sample_is_no_glitch(record):
+    """Truth by construction, after red team 21's rigid teeth meeting (four impacts within 70 ms at 50 Hz: +374 A
+    and the speed 6 rpm down in the same sample, back above its line in the next): the speed leaping against
+    the current's spike in the spike's own sample is the shaft jolted within a sample step, not interference.
+    The same leap with the current's sign (both up) is no jolt (a speed that rises lowers the current): a
+    glitch."""
+    from kilnctl.measure.glitches import JOLT_SIGMAS, _noise_sigma
+
+    clean, _, _ = record
+    cur, w = clean.current.copy(), clean.speed.copy()
+    leap = 1.5 * JOLT_SIGMAS * _noise_sigma(clean.speed)  # 4.6 rpm here (red team 21's: 6.4 rpm, 19 sigma)
+    cur[500] += 370.0
+    w[500] -= leap
+    w[501] += 0.3 * leap
+    m = Measurement.from_arrays(clean.t, cur, w, clean.speed_ref)
+    assert m.glitches == ()
+    w[500] += 2.0 * leap  # now up with the current
+    w[501] = clean.speed[501]
+    m2 = Measurement.from_arrays(clean.t, cur, w, clean.speed_ref)
+    assert [(g.channel, g.at) for g in m2.glitches] == [("current_A", (500,))]
+
+
 def test_spikes_are_no_stick_slip_falls(record):
     # a spike falls back as sharply as a breakaway; read across its samples there are none (the record is the
     # paper's friction law: no stick-slip at the set speed)
