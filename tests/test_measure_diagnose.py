@@ -1275,9 +1275,10 @@ def test_final_check_removes_an_effect_that_another_effects_other_form_replaces(
     selected, kept, dropped = d._final_check(None, SETUP, ["kiln_unbalance", "motor_coulomb_friction"], final,
                                              None, None, None, None, lambda s: None)
     # each effect checked with the others in their own form, and each of the others in its other forms too (the
-    # friction in its falling form, with its three local fits)
-    assert [(rest, form, n) for rest, form, n in seen][:4] == [
+    # friction in its falling form, with its three local fits, and in its building form, with two)
+    assert [(rest, form, n) for rest, form, n in seen][:5] == [
         (("motor_coulomb_friction",), None, 1), (("motor_coulomb_friction",), None, 3),
+        (("motor_coulomb_friction",), None, 2),
         (("kiln_unbalance",), None, 1), (("kiln_unbalance",), "two_harmonic", 1)]
     if not replaced:
         assert selected == ["kiln_unbalance", "motor_coulomb_friction"] and dropped == [] and d._forms == {}

@@ -90,3 +90,27 @@ def test_the_falling_form_loses_a_cm_of_the_friction_at_the_set_speed(a_cm):
     k = np.searchsorted(fall.t, 4.0)  # on the ramp (it ends at 1 + 500/74 = 7.8 s)
     expected = p.T_cm * (1.0 - a_cm * fall["speed_rpm"][k] / p.omega_ref) / p.k_i
     assert fall["i_a"][k] - base["i_a"][k] == pytest.approx(expected, rel=1e-3)  # seen: 9.5838 A for 9.5839
+
+
+def test_the_building_form_is_dahls_friction_on_a_shaft_turning_one_way():
+    # hand formula (Dahl 1968): dT/dtheta = sigma (1 - T/T_cm) for a shaft turning one way from rest, T(0) = 0,
+    # gives T = T_cm (1 - exp(-theta sigma/T_cm)) with theta the angle turned; the form's theta_cm is T_cm/sigma.
+    # Checked along the run against the angle the motor has turned, integrated from the logged speed by the
+    # trapezoid rule (a second method), and no sticking: the shaft turns from the first instants, as without
+    # friction (red team 21's E7: T_cm 420 N*m, sigma 600 N*m/rad, no stiction)
+    from scipy.integrate import cumulative_trapezoid
+
+    p = Parameters(T_cm=420.0, theta_cm=420.0 / 600.0)
+    r = _run(p, ("motor_friction_building",), t_end=6.0)
+    w = r["speed_rpm"] * np.pi / 30.0
+    theta = cumulative_trapezoid(w, r.t, initial=0.0)
+    dahl = -p.T_cm * (1.0 - np.exp(-theta / p.theta_cm))
+    turning = w > 1.0  # rad/s: away from the tanh's 0.01 rad/s
+    assert turning.sum() > 100
+    np.testing.assert_allclose(r.outputs["T_fm"][turning], dahl[turning], atol=0.5)  # N*m of 420
+    # built up after a few theta_cm: the full T_cm against the shaft
+    assert r.outputs["T_fm"][-1] == pytest.approx(-p.T_cm, rel=1e-6)
+    # no sticking: it turns when the run without friction does
+    free = _run(p, t_end=6.0)
+    k = np.searchsorted(r.t, 1.2)
+    assert r["speed_rpm"][k] > 0.5 * free["speed_rpm"][k] > 0.0

@@ -23,12 +23,21 @@ T_cm plus what the drive train asks of the shaft at standstill.  Sticking is
 modelled rather than regularised because the start-up delay it causes is
 part of the signature.
 
+Its ``building`` form (component ``motor_friction_building``) is a friction
+without sticking that builds up over the first turn of the shaft, as Dahl's
+model of pre-sliding has it for a shaft turning one way from rest:
+-T_cm (1 - exp(-theta_fm/theta_cm)) on the turning shaft, theta_fm the
+angle the motor has turned [rad].  Dahl's dT/dtheta = sigma (1 - T/T_cm)
+gives exactly this with theta_cm = T_cm/sigma.
+
 ``motor_coulomb_friction_smooth`` is its twin for the ramp optimizer:
 -T_cm*tanh(omega_m/MOTOR_FRICTION_OMEGA), a creep below 0.01 rad/s
 (0.02 % of the 52 rad/s running speed).
 """
 
 from __future__ import annotations
+
+import math
 
 import casadi as ca
 
@@ -55,6 +64,16 @@ def _falling_story(form_values: dict, own_values: dict) -> str | None:
     if "m_v" in form_values and "m_v" in own_values:
         s += f", with a burden of {form_values['m_v'] / 1e3:.1f} t against {own_values['m_v'] / 1e3:.1f} t"
     return s
+
+
+def _building_story(form_values: dict, own_values: dict) -> str | None:
+    """The building form's story where it differs from a constant friction, in words: one that takes more than
+    a tenth of a turn of the motor shaft to build up."""
+    th = form_values.get("theta_cm", 0.0)
+    if th < 0.1 * 2.0 * math.pi:
+        return None
+    return (f"a friction of {form_values['T_cm']:.3g} N*m without sticking, built up over {th:.2g} rad of the "
+            f"motor's rotation, against a constant {own_values['T_cm']:.3g} N*m that holds the shaft at rest")
 
 
 @register
@@ -95,7 +114,8 @@ class MotorCoulombFriction(Component):
             notes="a friction that falls with the speed (support rollers or bearings lifting onto their oil film) "
                   "is its 'falling' form, tried in each round where it is supported: on one set speed a constant "
                   "friction and a lighter burden, or a falling friction and a heavier one, draw the same steady "
-                  "current, and only the ramp tells them apart.",
+                  "current, and only the ramp tells them apart; a friction without sticking that builds up "
+                  "over the shaft's first turn (Dahl's pre-sliding) is its 'building' form.",
             forms=(Form("falling",
                         "a friction of T_cm at rest that falls in proportion to the motor speed, by a_cm T_cm at "
                         "the set speed (support rollers or bearings lifting onto their oil film): "
@@ -113,7 +133,18 @@ class MotorCoulombFriction(Component):
                         # the near start alone ends where the constant friction did (a_cm 0): the valley of a
                         # falling friction is reached from the starts above (red team 12's R17: a_cm 1.0 and
                         # the plant's burden, 309.7 t for 309)
-                        local_fits=3, alike=_falling_story),)),
+                        local_fits=3, alike=_falling_story),
+                   Form("building",
+                        "a friction without sticking that builds up over the shaft's first turn (brushes, seals, "
+                        "pre-sliding in the bearings; Dahl's model): T_cm (1 - exp(-theta_fm/theta_cm)) after "
+                        "the motor has turned theta_fm",
+                        ("motor_friction_building",),
+                        (FreeParameter("theta_cm", 1e-3, 30.0, "log", 0.5),),
+                        near={"theta_cm": 1e-3},
+                        starts=lambda v: [{"theta_cm": th} for th in (0.2, 1.0, 5.0)],
+                        # built up at once is the Coulomb friction without its sticking: the form's own end
+                        ends={"theta_cm": "lower"},
+                        local_fits=2, alike=_building_story))),
     )
 
     def initial_mode(self, params, x0):
@@ -186,3 +217,42 @@ class MotorFrictionFalloff(Component):
 
     def loads(self, e, mode):
         e.add_torque("motor", e.p.a_cm * e.p.T_cm * e.x["omega_motor"] * e.p.K_fb / e.p.omega_ref)
+
+
+@register
+class MotorFrictionBuilding(Component):
+    """Motor friction without sticking that builds up with the shaft's rotation: the ``building`` form of
+    ``motor_coulomb_friction`` (see the module docstring).
+
+    Torque -T_cm*(1 - exp(-theta_fm/theta_cm))*tanh(omega_m/0.01 rad/s) on the node ``motor``; the state
+    ``theta_fm`` [rad] is the angle the shaft has turned, d theta_fm/dt = omega_m*tanh(omega_m/0.01 rad/s)
+    (|omega_m| made smooth).  For a shaft turning one way from rest this is Dahl's friction with pre-sliding
+    stiffness sigma = T_cm/theta_cm [N*m/rad].  No modes: zero at rest, so the shaft turns as soon as it is
+    driven.  Output ``T_fm`` [N*m].
+    """
+
+    name = "motor_friction_building"
+    summary = "motor friction built up over the shaft's rotation: -T_cm*(1 - exp(-theta_fm/theta_cm))"
+    param_names = ("T_cm", "theta_cm")
+    requires = ("dc_motor",)
+    phase_after = "second_motor"
+    parameters = (
+        param("theta_cm", 0.5, "rad", "assumed: half a radian of the motor shaft (a Dahl friction's T_cm/sigma)",
+              "motor rotation over which the motor friction builds up, T_cm/sigma in Dahl's model (component "
+              "'motor_friction_building')", "effects", "positive"),
+    )
+
+    def declare(self, spec):
+        spec.add_state("theta_fm", "rad", 1.0, "angle the motor shaft has turned (motor friction's build-up)")
+
+    def loads(self, e, mode):
+        w = e.x["omega_motor"]
+        turning = ca.tanh(w / MOTOR_FRICTION_OMEGA)
+        T = -e.p.T_cm * (1.0 - ca.exp(-e.x["theta_fm"] / e.p.theta_cm)) * turning
+        e.add_torque("motor", T)
+        e.sig["T_fm"] = T
+        e.sig["theta_fm_dot"] = w * turning
+
+    def finish(self, e, mode):
+        e.set_rate("theta_fm", e.sig["theta_fm_dot"])
+        e.add_output("T_fm", e.sig["T_fm"])
