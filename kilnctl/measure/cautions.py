@@ -201,7 +201,7 @@ def effect_cautions(d, m, exp, params) -> list[str]:
         if not any(r is a for a in judged):  # a pair added both its effects: its rivals are named once
             judged.append(r)
             out += rival_texts(d, r)
-        out += form_rival_texts(d, name) + form_kept_texts(d, name)
+        out += form_rival_texts(d, name) + form_kept_texts(d, name) + form_also_texts(d, name)
         # the usual ranges scaled to this drive at the recorded set speed
         for note in eff.plausibility(d.final_calibration_.values_, params.replace(omega_ref=exp.omega_ref)):
             out.append(f"{name}: {note} (a value outside the usual range is reported, not refused)")
@@ -536,6 +536,30 @@ def form_kept_texts(d, effect: str) -> list[str]:
             f"{ev.holdout_z:.1f} standard errors): with stick-slip cycles in the model each refit stops in one of "
             f"many nearby valleys of the cost, and which one decides a difference of this size. Either form may "
             f"be right. {_DECIDES}"]
+
+
+def form_also_texts(d, effect: str) -> list[str]:
+    """A caution when a selected effect is in a form whose values a change outside the catalogue imitates on one
+    start-up (:attr:`~kilnctl.model.catalogue.Form.also`): red team 21's X1, a motor field weakened at the ramp
+    start and restored with 1.6 s, was selected as a motor friction falling by 100 % at the set speed.
+
+    Parameters
+    ----------
+    d : Diagnosis
+        The fitted diagnosis (``forms_``, ``final_calibration_``).
+    effect : str
+        A selected effect.
+
+    Returns
+    -------
+    list of str
+    """
+    form_name = (getattr(d, "forms_", None) or {}).get(effect)
+    form = CATALOGUE[effect].form(form_name) if form_name is not None else None
+    if form is None or form.also is None:
+        return []
+    text = form.also(d.final_calibration_.values_)
+    return [f"{effect} in its {form_name} form: {text}. {_DECIDES}"] if text else []
 
 
 def marginal_texts(effect: str, delta_bic: float, holdout_gain: float, holdout_z: float, min_delta_bic: float,

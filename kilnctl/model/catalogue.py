@@ -114,6 +114,12 @@ class Form:
         story in words; None where they tell the same.  Where the form then
         fits about as well without being supported, the diagnosis cautions
         that the record hardly tells the two apart.
+    also : callable or None
+        ``also(form_values) -> str or None``: where the form is selected at
+        values that a change outside the catalogue imitates on one start-up
+        (a friction gone by the set speed, and a current excess that fades
+        with the time while the ramp's speed grows with it), that change in
+        words; the diagnosis names it in a caution.
     """
 
     name: str
@@ -127,6 +133,7 @@ class Form:
     unsupported_too: bool = False
     local_fits: int = 1
     alike: Callable | None = field(repr=False, default=None)
+    also: Callable | None = field(repr=False, default=None)
 
 
 def _table1() -> Parameters:
