@@ -166,8 +166,8 @@ def test_a_friction_gone_by_the_set_speed_names_what_fades_with_the_time():
                                      "a_cm": 1.0})
     d = SimpleNamespace(forms_={FRICTION: "falling"}, final_calibration_=final)
     (text,) = form_also_texts(d, FRICTION)
-    assert text.startswith("motor_coulomb_friction in its falling form: the friction is 100 % gone at the set "
-                           "speed"), text
+    assert text.startswith("motor_coulomb_friction in its falling form: the friction, 100 % gone at the set "
+                           "speed, is a current above the model at the start"), text
     assert "a motor field weakened at standstill and restored as the ramp starts" in text
     assert text.endswith("A record where they act differently (another ramp rate or set speed) decides.")
     low = SimpleNamespace(values_=dict(final.values_, a_cm=0.7))

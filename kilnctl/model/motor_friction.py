@@ -72,7 +72,7 @@ def _falling_also(form_values: dict) -> str | None:
     1.6 s, was selected as a friction of 141 N*m at rest falling by 100 %)."""
     if form_values.get("a_cm", 0.0) < 0.8:
         return None
-    return (f"the friction is {100 * form_values['a_cm']:.0f} % gone at the set speed: a current above the "
+    return (f"the friction, {100 * form_values['a_cm']:.0f} % gone at the set speed, is a current above the "
             "model at the start that fades as the drive speeds up. Along one ramp the speed grows with the time, "
             "so an excess that fades with the time draws the same current: a motor field weakened at standstill "
             "and restored as the ramp starts, a cold bearing or seal warming, a brake released late")
