@@ -260,6 +260,9 @@ def make(spec, outdir, visibility=True):
 
 
 if __name__ == "__main__":
+    if len(sys.argv) < 2 or sys.argv[1].startswith("-"):
+        sys.exit("usage: python -m benchmarks.red8_records OUTDIR [--only R01,R08] [--no-visibility]: writes the "
+                 "records' CSV, TOML and truth into OUTDIR (made if missing)")
     outdir = sys.argv[1]
     os.makedirs(outdir, exist_ok=True)
     only = None
