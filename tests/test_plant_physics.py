@@ -100,6 +100,36 @@ def test_energy_conserved_through_backlash_impacts():
     assert np.ptp(E) / E[0] < 1e-5
 
 
+@pytest.mark.parametrize("zeta", [0.05, 0.3, 0.7])
+def test_mesh_damping_sets_the_restitution_of_an_impact(zeta):
+    # Truth: the closed-form impact of a spring and a damper in parallel that cannot pull (W = max(k x + c x', 0),
+    # x = Delta s - Delta x, mass m = 1 / (R_p^2/J_p + R_o^2/J_o) on Delta s): x(t) = v0/w_d exp(-zeta w_n t)
+    # sin(w_d t) until the force is zero at t_s, then free flight, so the teeth part at -x'(t_s) = e v0.  This
+    # is what the backlash's 'impact' form fits through C_e.
+    p = Parameters(delta_x=4e-3, gap_0=1.0, J_p=1500.0, J_o=2e5)
+    m = 1.0 / (p.R_p ** 2 / p.J_p + p.R_o ** 2 / p.J_o)
+    w_n = math.sqrt(p.k_e / m)
+    c = 2.0 * zeta * math.sqrt(p.k_e * m)
+    w_d = w_n * math.sqrt(1.0 - zeta ** 2)
+
+    def rate(t):  # x'(t) / v0
+        return math.exp(-zeta * w_n * t) * (math.cos(w_d * t) - zeta * w_n / w_d * math.sin(w_d * t))
+
+    def force(t):  # (k x + c x') / v0
+        return p.k_e * math.exp(-zeta * w_n * t) * math.sin(w_d * t) / w_d + c * rate(t)
+
+    e_exact = -rate(brentq(force, 1e-9, math.pi / w_d))
+    r = simulate(p.replace(C_e=c), components=("pinion", "mesh", "kiln"), t_end=0.012, dt=1e-5, rtol=1e-10,
+                 atol=1e-12, initial={"omega_pinion": 2.0})
+    t = list(r.t)
+    v = p.R_p * r["omega_pinion"] - p.R_o * r["omega_kiln"]  # closing speed of the teeth [m/s]
+    hit = next(e for e in r.events if e.kind == "contact")
+    part = next(e for e in r.events if e.kind == "separation" and e.t > hit.t)
+    e_sim = -v[t.index(part.t)] / v[t.index(hit.t)]
+    assert e_sim == pytest.approx(e_exact, rel=1e-4)
+    assert 0.0 < e_exact < 1.0
+
+
 def test_energy_conserved_frictionless_burden():
     # Truth: mu_c = mu_s = 0, kiln free: burden pendulum energy is conserved.
     p = Parameters(mu_c=0.0, mu_s=0.0, psi_0=0.4, friction_law="torque")

@@ -28,6 +28,30 @@ def _coupling_starts(values) -> list[dict]:
     return [{"k_c": k, "c_c": 2.0 * z * math.sqrt(k * j_m)} for k in (1e6, 1e7, 1e8) for z in (0.1, 0.3, 1.0)]
 
 
+#: the backlash's own starting gaps [m] (the paper's normal 8 mm, half and twice it)
+_GAP_STARTS = (0.004, 0.008, 0.016)
+
+#: the backlash's gap as fitted, and the points of its grid (evenly over 0 ... 60 mm, 0.76 mm apart)
+_GAP = FreeParameter("delta_x", 0.0, 0.06, "lin", 0.008)
+_GAP_GRID = 80
+
+#: a mesh damping at which the teeth stop one another without bouncing: about six times Table 1's critical
+#: damping of the pinion on the mesh, 2 sqrt(k_e J_p / R_p^2) = 1.6e7 N*s/m [N*s/m]
+_STOPPING_C_E = 1e8
+
+
+def _impact_starts(values) -> list[dict]:
+    """Starting points of the backlash's ``impact`` form: the fitted gap with the mesh damping C_e in three
+    decades about :data:`_STOPPING_C_E`, and the effect's gap grid with the teeth stopping.  The impact's time
+    moves with the gap, so its valley is about a millimetre wide, and the gap that a ringing mesh fitted best
+    may lie far from the one for teeth that stop (red team 21's E3: 0.8 mm with the setup's mesh, 9.7 mm with
+    teeth that stop, for the plant's 10 mm)."""
+    gaps = np.linspace(_GAP.lower, min(_GAP.upper, 10.0 * _GAP.typical), _GAP_GRID)
+    return ([{"C_e": c, "delta_x": values["delta_x"]} for c in (0.1 * _STOPPING_C_E, _STOPPING_C_E,
+                                                                   10.0 * _STOPPING_C_E)]
+            + [{"C_e": _STOPPING_C_E, "delta_x": float(d)} for d in gaps])
+
+
 #: a fitted drive train damped at or above this ratio of its torsional mode has no ring to show (a step response
 #: overshoots by less than 5 %) [-]
 RING_DAMPING = 0.7
@@ -292,11 +316,11 @@ class Mesh(Component):
             "Play between girth gear and pinion: at start-up the motor turns freely until the teeth meet, "
             "then they engage with an impact.",
             (), {}, "micro",
-            (FreeParameter("delta_x", 0.0, 0.06, "lin", 0.008),),
+            (_GAP,),
             "in the first second or so: current below the model while the motor turns free, then a spike "
             "when the teeth meet; nothing at steady state",
-            starts=lambda params, m: [{"delta_x": 0.004}, {"delta_x": 0.008}, {"delta_x": 0.016}],
-            plausible={"delta_x": (0.004, 0.016)}, grid_points=80, smoothing=(0.4, 0.1), null={"delta_x": 0.0},
+            starts=lambda params, m: [{"delta_x": d} for d in _GAP_STARTS],
+            plausible={"delta_x": (0.004, 0.016)}, grid_points=_GAP_GRID, smoothing=(0.4, 0.1), null={"delta_x": 0.0},
             notes="needs the micro model (coupling, pinion, mesh), which has backlash; the macro model has none. "
                   "The candidate runs the micro model with the base's calibrated values and fits delta_x; the "
                   "evidence is against the macro base (the micro model with delta_x = 0 is close to it). Only the "
@@ -304,7 +328,8 @@ class Mesh(Component):
                   "is a spike one or two samples long whose time moves with the gap, so the cost has a valley a "
                   "fraction of a millimetre wide: starts are compared, and fits begin, on a residual smoothed over "
                   "0.4 s, then 0.1 s, then none. When it is supported, the elastomeric coupling's stiffness and "
-                  "damping are fitted beside the play (its 'coupling' form).",
+                  "damping are fitted beside the play (its 'coupling' form), and apart from them the mesh's "
+                  "damping (its 'impact' form).",
             forms=(Form("coupling",
                         "the play with the link behind it fitted: the elastomeric coupling's stiffness k_c and "
                         "damping c_c (motor side), which set how the drive train rings after the teeth meet; the "
@@ -317,7 +342,18 @@ class Mesh(Component):
                         starts=_coupling_starts,
                         # a drive with no compliant coupling behind the play (a plant with a stiff link): the
                         # fit may take either to its upper bound, where the coupling is rigid
-                        ends={"k_c": "upper", "c_c": "upper"}),)),
+                        ends={"k_c": "upper", "c_c": "upper"}),
+                   Form("impact",
+                        "the play with the mesh's damping C_e fitted, which sets how the teeth meet: how much of "
+                        "their closing speed they give back (the setup's lightly damped mesh bounces and rings, "
+                        "teeth that stop one another within a sample need a damping above the mesh's critical); "
+                        "a plant whose teeth meet otherwise than a spring and a damper in parallel (a contact "
+                        "force growing with the penetration's power) is met only in its restitution",
+                        (), (FreeParameter("C_e", 1e4, 1e10, "log", 1e7),),
+                        # at the setup's C_e the form is the effect's own
+                        near={},
+                        starts=_impact_starts,
+                        local_fits=2),)),
     )
     requires = ("pinion", "kiln")
     modes = ("contact", "gap", "back")
