@@ -104,3 +104,24 @@ def failing_script(folder, text: str) -> str:
         lines.pop()
     return lines[-1]
 
+
+
+def read_written_record(truth):
+    """(params, measurement) of a record a red team's generator wrote (``truth["toml"]``, ``truth["csv"]``), read
+    as ``kilnctl diagnose`` reads them: the setup with its gains resolved, the record against it."""
+    from kilnctl.measure import load_setup, read_record
+    from kilnctl.simulate import resolve_gains
+
+    params = resolve_gains(load_setup(truth["toml"]).params)
+    return params, read_record(truth["csv"], params)
+
+
+def imported_packages(module) -> set:
+    """Top-level names of the packages a module's source imports (an ast scan of every ``import`` and
+    ``from ... import``, at any depth): what a red team's plant may use is checked against it."""
+    import ast
+
+    tree = ast.parse(Path(module.__file__).read_text())
+    names = {a.name.split(".")[0] for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names}
+    names |= {n.module.split(".")[0] for n in ast.walk(tree) if isinstance(n, ast.ImportFrom) and n.module}
+    return names

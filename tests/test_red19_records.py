@@ -13,6 +13,7 @@ import sys
 import pytest
 
 from benchmarks import red19_records as rr
+from conftest import imported_packages, read_written_record
 
 #: sha256 of red team 19's own N2.csv and N2.toml (/work/runs/red19, written by their make_records.py)
 N2_CSV_SHA256 = "012070eb8e39ee7e0791ffc3685da722efa21ebf3deeba387bc963322c3f0977"
@@ -28,26 +29,11 @@ def n2(tmp_path_factory):
     return rr.write_record("N2", tmp_path_factory.mktemp("red19"))
 
 
-def _setup(tr):
-    """(params, measurement) of a written record, as ``kilnctl diagnose`` reads them."""
-    from kilnctl.measure import load_setup, read_record
-    from kilnctl.simulate import resolve_gains
-
-    params = resolve_gains(load_setup(tr["toml"]).params)
-    return params, read_record(tr["csv"], params)
-
-
 def test_the_plant_imports_no_kilnctl():
     """The plant's independence: its module imports numpy and the standard library only (ast scan)."""
-    import ast
-    from pathlib import Path
-
     import benchmarks.red19_plant as plant
 
-    tree = ast.parse(Path(plant.__file__).read_text())
-    names = {a.name.split(".")[0] for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names}
-    names |= {n.module.split(".")[0] for n in ast.walk(tree) if isinstance(n, ast.ImportFrom) and n.module}
-    assert names <= {"__future__", "math", "numpy"}, names
+    assert imported_packages(plant) <= {"__future__", "math", "numpy"}
 
 
 def test_n2_regenerated_is_the_red_teams_file_byte_for_byte(n2):
@@ -69,7 +55,7 @@ def test_the_base_kiln_sticks_and_breaks_away_again_and_again_under_the_paper_la
     as one with cycles."""
     from kilnctl.measure.diagnose import Diagnosis
 
-    params, m = _setup(n2)
+    params, m = read_written_record(n2)
     assert (params.mu_c, params.R, params.L) == (0.35, 1.6, 1.05)
     assert params.mu_c * params.R / params.L == pytest.approx(0.5333, abs=1e-4)
     assert params.mu_s == 0.57 and params.friction_law == "paper"
@@ -92,7 +78,7 @@ def test_the_base_calibration_on_n2_reaches_the_plants_own_values(n2):
     False``: mu_s 0.385, J_v 4.2e5, 90.78 %)."""
     from kilnctl.measure.diagnose import Diagnosis
 
-    params, m = _setup(n2)
+    params, m = read_written_record(n2)
     d = Diagnosis(params)
     exp = m.experiment(params, t0=d.t0)
     d._setup_cycles = d._cycles_at_setup(m, params, exp)

@@ -15,6 +15,7 @@ import sys
 import pytest
 
 from benchmarks import red20_records as rr
+from conftest import imported_packages, read_written_record
 
 #: sha256 of red team 20's own E6.csv and E6.toml (/work/runs/red20, written by their make_records.py)
 E6_CSV_SHA256 = "6923071e012c903764387aba08e4fbfa7b598549edd63f9a913177c431daa31f"
@@ -36,15 +37,6 @@ def n1(tmp_path_factory):
     return rr.write_record("N1", tmp_path_factory.mktemp("red20"))
 
 
-def _setup(tr):
-    """(params, measurement) of a written record, as ``kilnctl diagnose`` reads them."""
-    from kilnctl.measure import load_setup, read_record
-    from kilnctl.simulate import resolve_gains
-
-    params = resolve_gains(load_setup(tr["toml"]).params)
-    return params, read_record(tr["csv"], params)
-
-
 def _rest_current(tr):
     """The plant's noise-free current [A] over the last half second at rest before the ramp (1 s after the
     record's first time stamp)."""
@@ -54,15 +46,9 @@ def _rest_current(tr):
 
 def test_the_plant_imports_no_kilnctl():
     """The plant's independence: its module imports numpy and the standard library only (ast scan)."""
-    import ast
-    from pathlib import Path
-
     import benchmarks.red20_plant as plant
 
-    tree = ast.parse(Path(plant.__file__).read_text())
-    names = {a.name.split(".")[0] for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names}
-    names |= {n.module.split(".")[0] for n in ast.walk(tree) if isinstance(n, ast.ImportFrom) and n.module}
-    assert names <= {"__future__", "math", "numpy"}, names
+    assert imported_packages(plant) <= {"__future__", "math", "numpy"}
 
 
 @pytest.mark.slow  # about 5 s on this machine (2 cores, shared with other jobs): E6 regenerated
@@ -88,7 +74,7 @@ def test_the_base_kiln_slides_smoothly_under_the_paper_law(n1):
     (the red team's base check: 19 switches, a cycle of about 3 s), so the check tells the two apart."""
     from kilnctl.measure.diagnose import Diagnosis
 
-    params, m = _setup(n1)
+    params, m = read_written_record(n1)
     assert (params.mu_c, params.R, params.L) == (0.38, 1.9, 1.15)
     assert params.mu_c * params.R / params.L == pytest.approx(0.6278, abs=1e-4)
     assert params.mu_s == 0.45 and params.friction_law == "paper"
@@ -116,7 +102,7 @@ def test_e6_is_read_as_held_at_rest_and_n1_is_not(e6, n1):
     assert _rest_current(e6) == pytest.approx(hand, abs=0.05)
     assert _rest_current(n1) == 0.0
     for tr, held in ((e6, True), (n1, False)):
-        params, m = _setup(tr)
+        params, m = read_written_record(tr)
         assert m.experiment(params, t0=Diagnosis(params).t0).held is held
 
 

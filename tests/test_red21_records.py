@@ -7,16 +7,15 @@ impacts) and what they wrote in by hand (truth.json: E6's outliers), and the bas
 worked out by hand.
 """
 
-import ast
 import hashlib
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 from benchmarks import red21_records as rr
+from conftest import imported_packages, read_written_record
 
 #: sha256 of red team 21's own E3.csv and E3.toml (/work/runs/red21, written by their make_records.py)
 E3_CSV_SHA256 = "e324e5e8fd26017bcee0e3e45e159a0bd0e62e2f0a16b5df45cea25d57910fb9"
@@ -42,24 +41,12 @@ def e6(tmp_path_factory):
     return rr.write_record("E6", tmp_path_factory.mktemp("red21"))
 
 
-def _setup(tr):
-    """(params, measurement) of a written record, as ``kilnctl diagnose`` reads them."""
-    from kilnctl.measure import load_setup, read_record
-    from kilnctl.simulate import resolve_gains
-
-    params = resolve_gains(load_setup(tr["toml"]).params)
-    return params, read_record(tr["csv"], params)
-
-
 def test_the_plant_imports_no_kilnctl():
     """The plant's independence: its module imports numpy, scipy and the standard library's math only (ast
     scan)."""
     import benchmarks.red21_plant as plant
 
-    tree = ast.parse(Path(plant.__file__).read_text())
-    names = {a.name.split(".")[0] for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names}
-    names |= {n.module.split(".")[0] for n in ast.walk(tree) if isinstance(n, ast.ImportFrom) and n.module}
-    assert names <= {"__future__", "math", "numpy", "scipy"}, names
+    assert imported_packages(plant) <= {"__future__", "math", "numpy", "scipy"}
 
 
 def test_e3_regenerated_is_the_red_teams_file_byte_for_byte(e3):
@@ -86,7 +73,7 @@ def test_e3s_gear_impacts_are_kept_by_the_reader(e3):
     assert t[k] == pytest.approx(1.82)
     around = np.median(i[[k - 3, k - 2, k + 2, k + 3]])
     assert i[k] - around > 300.0                       # the plant's own current, no noise: the impact
-    params, m = _setup(e3)
+    params, m = read_written_record(e3)
     assert m.glitches == ()
     near = (m.t >= 1.78) & (m.t <= 1.90)
     assert near.sum() == 7 and m.kept[near].all()
@@ -102,7 +89,7 @@ def test_e3s_rigid_teeth_give_the_plant_gap_in_the_impact_form(e3):
     the plant's do, and the gap is the plant's."""
     from kilnctl.measure.diagnose import Diagnosis
 
-    params, m = _setup(e3)
+    params, m = read_written_record(e3)
     assert params.C_e == 1e6 and e3["plant_effects"]["backlash_impact"]["dx"] == 0.01
     d = Diagnosis(params, candidates=["backlash"], model="micro").fit(m)
     assert d.selected_ == ["backlash"] and d.forms_ == {"backlash": "impact"}
@@ -120,7 +107,7 @@ def test_e6s_written_in_current_outliers_are_still_glitches(e6):
     glitch, and no other current glitch.  (E6's speed outlier, +14 rpm at 29.3 s, is smaller than the reader's
     least spike, 2 % of the speed's range: it is not asserted either way.)"""
     assert [tuple(o) for o in e6["noise"]["outliers"]["current"]] == E6_CURRENT_OUTLIERS
-    params, m = _setup(e6)
+    params, m = read_written_record(e6)
     cur = [g for g in m.glitches if g.channel == "current_A"]
     assert [len(g.at) for g in cur] == [1, 1]
     assert [round(float(m.t[g.at[0]]), 2) for g in cur] == [t for t, _ in E6_CURRENT_OUTLIERS]
@@ -141,7 +128,7 @@ def test_the_base_kiln_slides_steadily_under_the_paper_law(e6):
     apart."""
     from kilnctl.measure.diagnose import Diagnosis
 
-    params, m = _setup(e6)
+    params, m = read_written_record(e6)
     assert (params.mu_c, params.R, params.L) == (0.36, 2.55, 1.62)
     assert params.mu_c * params.R / params.L == pytest.approx(0.5667, abs=1e-4)
     assert params.mu_s == 0.46 and params.friction_law == "paper"

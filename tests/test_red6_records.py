@@ -15,6 +15,7 @@ import pytest
 from benchmarks import red6_records as rr
 from benchmarks.red6_plant import BASE, Plant
 from kilnctl import Parameters
+from conftest import imported_packages
 
 
 def test_effect_free_record_matches_kilnctl_model_at_its_true_values(tmp_path):
@@ -104,15 +105,9 @@ def test_cli_lists_the_nine_records():
 
 def test_the_plant_imports_no_kilnctl():
     """The plant's independence: its module imports numpy, scipy and the standard library only."""
-    import ast
-    from pathlib import Path
-
     import benchmarks.red6_plant as plant
 
-    tree = ast.parse(Path(plant.__file__).read_text())
-    names = {a.name.split(".")[0] for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names}
-    names |= {n.module.split(".")[0] for n in ast.walk(tree) if isinstance(n, ast.ImportFrom) and n.module}
-    assert names <= {"__future__", "math", "numpy", "scipy"}, names
+    assert imported_packages(plant) <= {"__future__", "math", "numpy", "scipy"}
 
 
 def test_kiln_second_harmonic_equals_the_red6_plants_two_harmonic_load():
