@@ -51,6 +51,9 @@ def ar1(rng, n, sig, tau, fs):
 
 def main(argv=None):
     argv = sys.argv if argv is None else argv
+    if len(argv) < 2 or argv[1].startswith('-'):
+        sys.exit('usage: python -m benchmarks.red9_records OUTDIR [--only R01,R08]: writes the records\' CSV, '
+                 'TOML and truth into OUTDIR (made if missing)')
     outdir = argv[1]
     only = None
     if '--only' in argv:

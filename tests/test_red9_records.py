@@ -8,6 +8,11 @@ C_po 3e5, which rings for seconds) and a motor Coulomb friction of 300 N m (R04'
 (measured when written: 0.025 and 0.11 A; without the effect 26 and 65 A).
 """
 
+import os
+import subprocess
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -34,3 +39,15 @@ def test_kilnctl_follows_the_red_teams_plant(effect, values):
     bare = simulate(Parameters(**GIVEN), "macro", 29.0, dt=0.02)
     miss = float(np.sqrt(np.mean((np.interp(t[on] - 1.0, bare.t, bare.outputs["i_a"]) - current[on]) ** 2)))
     assert miss > 20 * max(rms, 0.2)
+
+
+
+@pytest.mark.parametrize("option", ["--list", "--help"])
+def test_an_option_in_place_of_the_folder_gets_the_usage_line(tmp_path, option):
+    # truth: the generator's usage (benchmarks/red9_records.py): OUTDIR first.  `--list` had written the ten
+    # records into a folder named --list; now it exits with the usage line and writes nothing
+    root = Path(__file__).resolve().parents[1]
+    out = subprocess.run([sys.executable, "-m", "benchmarks.red9_records", option], capture_output=True, text=True,
+                         timeout=60, cwd=tmp_path, env=dict(os.environ, PYTHONPATH=str(root)))
+    assert out.returncode != 0 and "usage: python -m benchmarks.red9_records OUTDIR" in out.stderr
+    assert list(tmp_path.iterdir()) == []
