@@ -82,20 +82,21 @@ def test_e3s_gear_impacts_are_kept_by_the_reader(e3):
 
 @pytest.mark.slow  # about 30 s on 2 cores: a micro-model diagnosis with one candidate
 def test_e3s_rigid_teeth_give_the_plant_gap_in_the_impact_form(e3):
-    """Truth: the red team's plant (truth.json: a gap of 10 mm, rigid teeth meeting with restitution 0.5) and its
-    nuisance values (the burden's mass 786.8 t).  With the setup's lightly damped mesh (C_e 1e6 N*s/m, the
-    teeth bouncing) the backlash's own fit stops at a gap of about 1 mm, where the impact's time fits least
-    badly; with the mesh's damping fitted beside the gap (the ``impact`` form) the teeth stop one another, as
-    the plant's do, and the gap is the plant's."""
+    """Truth: the red team's plant (truth.json: a gap of 10 mm, rigid teeth meeting with restitution 0.5, an
+    impulse between the whole motor side and the kiln: no compliant link) and its nuisance values (the burden's
+    mass 786.8 t).  With the setup's lightly damped mesh (C_e 1e6 N*s/m, the teeth bouncing) and soft coupling
+    (k_c 1.5e5 N*m/rad) the backlash's own fit stops at a gap of about 1 mm, where the impact's time fits least
+    badly; with the mesh's damping and the link fitted beside the gap (the ``impact`` form) the teeth stop one
+    another behind a stiff link, as the plant's do, and the gap is the plant's."""
     from kilnctl.measure.diagnose import Diagnosis
 
     params, m = read_written_record(e3)
-    assert params.C_e == 1e6 and e3["plant_effects"]["backlash_impact"]["dx"] == 0.01
+    assert (params.C_e, params.k_c) == (1e6, 1.5e5) and e3["plant_effects"]["backlash_impact"]["dx"] == 0.01
     d = Diagnosis(params, candidates=["backlash"], model="micro").fit(m)
     assert d.selected_ == ["backlash"] and d.forms_ == {"backlash": "impact"}
     values = d.final_calibration_.values_
     assert values["delta_x"] == pytest.approx(0.01, rel=0.05)
-    assert values["C_e"] > 10 * params.C_e  # the teeth stop: far above the setup's ringing mesh
+    assert values["C_e"] > 10 * params.C_e and values["k_c"] > 10 * params.k_c  # teeth that stop, a stiff link
     assert values["m_v"] == pytest.approx(E3_TRUTH["m_v"], rel=0.01)
     own = next(r for r in d.form_results_ if r[1] == "impact")
     assert own[5]["delta_x"] < 0.5 * values["delta_x"]  # the gap in the effect's own form: far short of it

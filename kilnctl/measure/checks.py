@@ -206,15 +206,22 @@ class SelectionChecks:
                                                                                c.calibration.values_)]
         return forms, (m, params, struct, scales, train, first, own, exp, ff)
 
-    def _final_forms(self, m, params, selected, final, exp, say):
-        """A selected effect whose form's added parameter ends at a bound at the final values goes back to its
-        own form.
+    def _final_forms(self, m, params, selected, final, exp, say, current=None):
+        """A selected effect whose form's added parameter ends at a bound at the final values is refitted in its
+        form from the rounds' values, and goes back to its own form when that refit ends at a bound too or fits
+        worse than the effect in its own form.
 
         The rounds refuse a form whose added parameter ends within :data:`FORM_BOUND` of a bound (see
         :meth:`_in_best_form`); the final fit, from other starts on the whole record, can drift there after the
         round (the benchmark plant's backlash records, before zeta_s was bounded below at 0.3: the
         second-order form ended at zeta_s 0.103 at the final fit).  Such an effect is refitted in its own form
         from the final values (one local fit on the whole record); the final check then judges it as any other.
+        Where the form's cost is flat out to a bound, the final search can also end there from a start far from
+        the rounds' valley (red team 21's E3: the backlash's impact form, 98.6 % in its round with a stiff link
+        k_c 7e6 N*m/rad, ended at the final fit with k_c at 1.3e4, 98.6 % again; in its own form 92.5 %, and the
+        final check then removed it): so the form is also refitted from ``current`` (the rounds' calibration,
+        one local fit on the whole record), and kept there when no form's added parameter ends at a bound and
+        it fits at least as well as the effect in its own form.
 
         Returns
         -------
@@ -227,6 +234,8 @@ class SelectionChecks:
             pinned = _pinned(form, final.values_) if form else []
             if not pinned:
                 continue
+            at = ", ".join(f"{k} = {final.values_[k]:.3g}" for k in pinned)
+            inside = self._form_from_rounds(m, params, selected, final, current, exp)
             forms = {k: v for k, v in self._forms.items() if k != e}
             try:
                 with self._using_forms(forms):
@@ -235,8 +244,13 @@ class SelectionChecks:
                     own = self._calibrate(m, params, selected, "std", None, init, (), exp, None, None, 1, True)
             except KilnctlError:  # kept in its form: the final check judges it there
                 continue
+            if inside is not None and inside.cost_ <= own.cost_:
+                say(f"  {e}: its {form.name} form ended at a bound ({at}) at the final fit; refitted from the "
+                    f"rounds' values it does not ({inside.fit_percent_['current_A']:.1f} % against "
+                    f"{own.fit_percent_['current_A']:.1f} % in its own form): kept there")
+                final = inside
+                continue
             self._forms = forms
-            at = ", ".join(f"{k} = {final.values_[k]:.3g}" for k in pinned)
             notes.append(f"{e} was selected in its {form.name} form, but at the final fit its {at} ended at a bound "
                          f"of its range: there the form stands in for another difference, so {e} is fitted in its "
                          f"own form (current fit {final.fit_percent_['current_A']:.1f} % in the form, "
@@ -244,6 +258,23 @@ class SelectionChecks:
             say(f"  {e}: its {form.name} form ended at a bound ({at}) at the final fit: refitted in its own form")
             final = own
         return final, notes
+
+    def _form_from_rounds(self, m, params, selected, final, current, exp):
+        """The selected structure in its forms refitted on the whole record from the rounds' values
+        (``current``, completed by ``final``'s), one local fit; None when there are none, when it fails, or when
+        a form's added parameter ends at a bound there too."""
+        if current is None:
+            return None
+        names = self._free_names(params, selected)
+        init = {k: v for k, v in final.values_.items() if k in names}
+        init.update({k: v for k, v in current.values_.items() if k in names})
+        try:
+            cal = self._calibrate(m, params, selected, "std", None, init, (), exp, None, None, 1, True)
+        except KilnctlError:
+            return None
+        if any(_pinned(CATALOGUE[x].form(f), cal.values_) for x, f in self._forms.items() if x in selected):
+            return None
+        return cal
 
     def _final_check(self, m, params, selected, final, scales, train, test, exp, say, pool=None):
         """Every effect of the final model must earn its place on the whole record, the others refitted without it.

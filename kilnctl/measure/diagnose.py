@@ -608,7 +608,7 @@ class Diagnosis(CandidateRefits, SelectionChecks):
         else:
             final = base
         self.final_search_ = dict(_search_summary(final), reanchor_rounds=self.reanchor_rounds_)
-        final, form_notes = self._final_forms(m, params, tuple(selected), final, exp, say)
+        final, form_notes = self._final_forms(m, params, tuple(selected), final, exp, say, current)
         selected, final, dropped = self._final_check(m, params, selected, final, scales, train, test, exp, say,
                                                      pool)
         for check in (self._final_pulse, self._final_line):  # a change outside the catalogue that an effect imitated

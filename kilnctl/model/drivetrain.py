@@ -21,11 +21,21 @@ from .catalogue import Effect, Form, FreeParameter, kiln_inertia_scale
 DS_SCALE = 1e-4
 
 
+#: the coupling's stiffness and damping as the backlash's forms fit them
+_K_C = FreeParameter("k_c", 1e4, 1e9, "log", 1e5)
+_C_C = FreeParameter("c_c", 1.0, 1e6, "log", 150.0)
+
+
+def _link(k_c: float, zeta: float) -> dict:
+    """A coupling of stiffness ``k_c`` [N*m/rad] damped at ``zeta`` of its mode on the motor: c_c = 2 zeta
+    sqrt(k_c J_m) with Table 1's J_m (starting points only)."""
+    return {"k_c": k_c, "c_c": 2.0 * zeta * math.sqrt(k_c * Parameters().J_m)}
+
+
 def _coupling_starts(values) -> list[dict]:
     """Starting points of the backlash's ``coupling`` form: a stiffer link in three decades, damped at 0.1, 0.3
-    and 1 of its mode on the motor (c = 2 zeta sqrt(k J_m), Table 1's J_m: starting points only)."""
-    j_m = Parameters().J_m
-    return [{"k_c": k, "c_c": 2.0 * z * math.sqrt(k * j_m)} for k in (1e6, 1e7, 1e8) for z in (0.1, 0.3, 1.0)]
+    and 1 of its mode on the motor."""
+    return [_link(k, z) for k in (1e6, 1e7, 1e8) for z in (0.1, 0.3, 1.0)]
 
 
 #: the backlash's own starting gaps [m] (the paper's normal 8 mm, half and twice it)
@@ -42,14 +52,16 @@ _STOPPING_C_E = 1e8
 
 def _impact_starts(values) -> list[dict]:
     """Starting points of the backlash's ``impact`` form: the fitted gap with the mesh damping C_e in three
-    decades about :data:`_STOPPING_C_E`, and the effect's gap grid with the teeth stopping.  The impact's time
-    moves with the gap, so its valley is about a millimetre wide, and the gap that a ringing mesh fitted best
-    may lie far from the one for teeth that stop (red team 21's E3: 0.8 mm with the setup's mesh, 9.7 mm with
-    teeth that stop, for the plant's 10 mm)."""
-    gaps = np.linspace(_GAP.lower, min(_GAP.upper, 10.0 * _GAP.typical), _GAP_GRID)
+    decades about :data:`_STOPPING_C_E`, and the effect's gap grid with the teeth stopping, behind them the
+    setup's coupling or a rigid link (k_c 1e8 N*m/rad).  The impact's time moves with the gap, so its valley is
+    about a millimetre wide, and the gap that a ringing mesh fitted best may lie far from the one for teeth
+    that stop (red team 21's E3: 0.8 mm with the setup's mesh, 9.9 mm with teeth that stop, for the plant's
+    10 mm)."""
+    gaps = [float(d) for d in np.linspace(_GAP.lower, min(_GAP.upper, 10.0 * _GAP.typical), _GAP_GRID)]
     return ([{"C_e": c, "delta_x": values["delta_x"]} for c in (0.1 * _STOPPING_C_E, _STOPPING_C_E,
                                                                    10.0 * _STOPPING_C_E)]
-            + [{"C_e": _STOPPING_C_E, "delta_x": float(d)} for d in gaps])
+            + [{"C_e": _STOPPING_C_E, "delta_x": d} for d in gaps]
+            + [dict(_link(1e8, 0.3), C_e=_STOPPING_C_E, delta_x=d) for d in gaps])
 
 
 #: a fitted drive train damped at or above this ratio of its torsional mode has no ring to show (a step response
@@ -328,15 +340,14 @@ class Mesh(Component):
                   "is a spike one or two samples long whose time moves with the gap, so the cost has a valley a "
                   "fraction of a millimetre wide: starts are compared, and fits begin, on a residual smoothed over "
                   "0.4 s, then 0.1 s, then none. When it is supported, the elastomeric coupling's stiffness and "
-                  "damping are fitted beside the play (its 'coupling' form), and apart from them the mesh's "
+                  "damping are fitted beside the play (its 'coupling' form), and with them the mesh's "
                   "damping (its 'impact' form).",
             forms=(Form("coupling",
                         "the play with the link behind it fitted: the elastomeric coupling's stiffness k_c and "
                         "damping c_c (motor side), which set how the drive train rings after the teeth meet; the "
                         "coupling's curve is assumed (the thesis [9] is not available), and a drive with a "
                         "stiffer, softer or better damped link than assumed rings otherwise",
-                        (), (FreeParameter("k_c", 1e4, 1e9, "log", 1e5),
-                             FreeParameter("c_c", 1.0, 1e6, "log", 150.0)),
+                        (), (_K_C, _C_C),
                         # at the setup's k_c and c_c the form is the effect's own
                         near={},
                         starts=_coupling_starts,
@@ -344,15 +355,20 @@ class Mesh(Component):
                         # fit may take either to its upper bound, where the coupling is rigid
                         ends={"k_c": "upper", "c_c": "upper"}),
                    Form("impact",
-                        "the play with the mesh's damping C_e fitted, which sets how the teeth meet: how much of "
-                        "their closing speed they give back (the setup's lightly damped mesh bounces and rings, "
-                        "teeth that stop one another within a sample need a damping above the mesh's critical); "
-                        "a plant whose teeth meet otherwise than a spring and a damper in parallel (a contact "
-                        "force growing with the penetration's power) is met only in its restitution",
-                        (), (FreeParameter("C_e", 1e4, 1e10, "log", 1e7),),
-                        # at the setup's C_e the form is the effect's own
+                        "the play with the mesh's damping C_e fitted, which sets how the teeth meet, and the link "
+                        "behind it as in the coupling form: how much of their closing speed the teeth give back "
+                        "(the setup's lightly damped mesh bounces and rings, teeth that stop one another within a "
+                        "sample need a damping above the mesh's critical); a plant whose teeth meet otherwise "
+                        "than a spring and a damper in parallel (a contact force growing with the penetration's "
+                        "power) is met only in its restitution",
+                        (), (FreeParameter("C_e", 1e4, 1e9, "log", 1e7), _K_C, _C_C),
+                        # at the setup's C_e, k_c and c_c the form is the effect's own
                         near={},
                         starts=_impact_starts,
+                        # teeth that stop without any rebound (a plastic impact: above a few times the mesh's
+                        # critical damping the fit is flat in C_e, and a final fit drifted to 9e9 on red team
+                        # 21's E3) and a rigid link are physical limits of the form
+                        ends={"C_e": "upper", "k_c": "upper", "c_c": "upper"},
                         local_fits=2),)),
     )
     requires = ("pinion", "kiln")
