@@ -86,8 +86,8 @@ def test_e3s_rigid_teeth_give_the_plant_gap_in_the_impact_form(e3):
     impulse between the whole motor side and the kiln: no compliant link) and its nuisance values (the burden's
     mass 786.8 t).  With the setup's lightly damped mesh (C_e 1e6 N*s/m, the teeth bouncing) and soft coupling
     (k_c 1.5e5 N*m/rad) the backlash's own fit stops at a gap of about 1 mm, where the impact's time fits least
-    badly; with the mesh's damping and the link fitted beside the gap (the ``impact`` form) the teeth stop one
-    another behind a stiff link, as the plant's do, and the gap is the plant's."""
+    badly; with the mesh's damping and the link's stiffness fitted beside the gap (the ``impact`` form) the teeth
+    stop one another behind a stiff link, as the plant's do, and the gap is the plant's."""
     from kilnctl.measure.diagnose import Diagnosis
 
     params, m = read_written_record(e3)
