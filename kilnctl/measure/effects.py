@@ -123,12 +123,8 @@ def grid_starts(parameters, n: int = 24) -> list[dict]:
             amps = np.geomspace(fp.typical / 10, min(fp.upper, 10 * fp.typical), 6)
             axes.append([{fp.name: float(a), fp.partner: float(ph)} for a in amps
                          for ph in np.arange(8) * (2 * math.pi / 8)])
-        elif fp.kind == "log":
-            lo, hi = max(fp.lower, fp.typical / 100), min(fp.upper, fp.typical * 100)
-            axes.append([{fp.name: float(v)} for v in np.geomspace(lo, hi, per)])
         else:
-            hi = min(fp.upper, 10 * fp.typical)
-            axes.append([{fp.name: float(v)} for v in np.linspace(fp.lower, hi, per)])
+            axes.append([{fp.name: v} for v in fp.grid(per)])
     out = [{}]
     for ax in axes:
         out = [dict(a, **b) for a in out for b in ax]

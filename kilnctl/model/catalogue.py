@@ -13,6 +13,8 @@ import math
 from dataclasses import dataclass, field
 from typing import Callable
 
+import numpy as np
+
 from ..params import SPECS, Parameters
 
 __all__ = ["FreeParameter", "Form", "Effect", "motor_scale", "motor_torque_scale", "kiln_torque_scale", "drag_scale",
@@ -53,6 +55,14 @@ class FreeParameter:
         """Unit of the parameter (from its declaration)."""
         return SPECS[self.name].unit if self.name in SPECS else ""
 
+    def grid(self, n: int) -> list[float]:
+        """``n`` values over the parameter's usual span, for a coarse grid of starting points: geometric
+        between max(lower, typical/100) and min(upper, 100 typical) for ``log``, even from the lower bound to
+        min(upper, 10 typical) for ``lin`` [unit of the parameter]."""
+        if self.kind == "log":
+            return [float(v) for v in np.geomspace(max(self.lower, self.typical / 100),
+                                                   min(self.upper, self.typical * 100), n)]
+        return [float(v) for v in np.linspace(self.lower, min(self.upper, 10 * self.typical), n)]
 
 
 @dataclass(frozen=True)

@@ -21,21 +21,15 @@ from .catalogue import Effect, Form, FreeParameter, kiln_inertia_scale
 DS_SCALE = 1e-4
 
 
-#: the coupling's stiffness and damping as the backlash's forms fit them
+#: the coupling's stiffness as the backlash's forms fit it
 _K_C = FreeParameter("k_c", 1e4, 1e9, "log", 1e5)
-_C_C = FreeParameter("c_c", 1.0, 1e6, "log", 150.0)
-
-
-def _link(k_c: float, zeta: float) -> dict:
-    """A coupling of stiffness ``k_c`` [N*m/rad] damped at ``zeta`` of its mode on the motor: c_c = 2 zeta
-    sqrt(k_c J_m) with Table 1's J_m (starting points only)."""
-    return {"k_c": k_c, "c_c": 2.0 * zeta * math.sqrt(k_c * Parameters().J_m)}
 
 
 def _coupling_starts(values) -> list[dict]:
     """Starting points of the backlash's ``coupling`` form: a stiffer link in three decades, damped at 0.1, 0.3
-    and 1 of its mode on the motor."""
-    return [_link(k, z) for k in (1e6, 1e7, 1e8) for z in (0.1, 0.3, 1.0)]
+    and 1 of its mode on the motor (c = 2 zeta sqrt(k J_m), Table 1's J_m: starting points only)."""
+    j_m = Parameters().J_m
+    return [{"k_c": k, "c_c": 2.0 * z * math.sqrt(k * j_m)} for k in (1e6, 1e7, 1e8) for z in (0.1, 0.3, 1.0)]
 
 
 #: the backlash's own starting gaps [m] (the paper's normal 8 mm, half and twice it)
@@ -57,7 +51,7 @@ def _impact_starts(values) -> list[dict]:
     about a millimetre wide, and the gap that a ringing mesh fitted best may lie far from the one for teeth
     that stop (red team 21's E3: 0.8 mm with the setup's mesh, 9.9 mm with teeth that stop, for the plant's
     10 mm)."""
-    gaps = [float(d) for d in np.linspace(_GAP.lower, min(_GAP.upper, 10.0 * _GAP.typical), _GAP_GRID)]
+    gaps = _GAP.grid(_GAP_GRID)
     return ([{"C_e": c, "delta_x": values["delta_x"]} for c in (0.1 * _STOPPING_C_E, _STOPPING_C_E,
                                                                    10.0 * _STOPPING_C_E)]
             + [{"C_e": _STOPPING_C_E, "delta_x": d} for d in gaps]
@@ -347,7 +341,7 @@ class Mesh(Component):
                         "damping c_c (motor side), which set how the drive train rings after the teeth meet; the "
                         "coupling's curve is assumed (the thesis [9] is not available), and a drive with a "
                         "stiffer, softer or better damped link than assumed rings otherwise",
-                        (), (_K_C, _C_C),
+                        (), (_K_C, FreeParameter("c_c", 1.0, 1e6, "log", 150.0)),
                         # at the setup's k_c and c_c the form is the effect's own
                         near={},
                         starts=_coupling_starts,
